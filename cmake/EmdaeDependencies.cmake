@@ -1,0 +1,36 @@
+# Third-party libraries, all from Debian's packages (scripts/install-deps.sh).
+find_package(Eigen3 3.4 REQUIRED NO_MODULE)
+find_package(GSL REQUIRED)
+find_package(fmt REQUIRED)
+find_package(nlohmann_json 3.10 REQUIRED)
+find_package(tomlplusplus 3 REQUIRED)
+find_package(CLI11 2 REQUIRED)
+
+# SUNDIALS 6.4 (KINSOL, IDA, sparse matrix, SUNLinSol_KLU). Debian's config
+# file lists targets for every optional module; we use the shared libraries.
+find_package(SUNDIALS 6.4 REQUIRED CONFIG)
+foreach(_t SUNDIALS::kinsol_shared SUNDIALS::ida_shared SUNDIALS::sunlinsolklu_shared
+           SUNDIALS::sunmatrixsparse_shared SUNDIALS::nvecserial_shared)
+  if(NOT TARGET ${_t})
+    message(FATAL_ERROR "SUNDIALS target ${_t} not found: install libsundials-dev (6.4)")
+  endif()
+endforeach()
+# SUNDIALS must have been built with 64-bit indices: the mass and Jacobian
+# matrices are handed to it as Eigen matrices with `long` indices.
+include(CheckCXXSourceCompiles)
+set(CMAKE_REQUIRED_INCLUDES /usr/include)
+check_cxx_source_compiles("
+#include <sundials/sundials_types.h>
+#include <type_traits>
+static_assert(sizeof(sunindextype) == sizeof(long), \"index width\");
+int main() { return 0; }" EMDAE_SUNDIALS_INDEX_IS_LONG)
+if(NOT EMDAE_SUNDIALS_INDEX_IS_LONG)
+  message(FATAL_ERROR "SUNDIALS must use 64-bit indices (sunindextype == long)")
+endif()
+
+if(EMDAE_BUILD_TESTS)
+  find_package(GTest REQUIRED)
+endif()
+if(EMDAE_BUILD_BENCH)
+  find_package(benchmark REQUIRED)
+endif()

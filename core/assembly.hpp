@@ -1,0 +1,57 @@
+// Global assembly of the system's terms for the steppers: forces (gradients of
+// the chosen kind between q0 and q1) and their Jacobians w.r.t. q1 as
+// triplets. Every stepper builds its residual from these, so no physics is
+// written twice. Rows of prescribed dofs are left out of the force
+// Jacobians: a stepper replaces those rows by its own prescribed-motion rows.
+#pragma once
+
+#include <Eigen/Sparse>
+#include <vector>
+
+#include "core/gradient.hpp"
+#include "core/system.hpp"
+
+namespace emdae {
+
+using Triplets = std::vector<Eigen::Triplet<double, long>>;
+
+class Assembler {
+ public:
+  explicit Assembler(const System& system) : s_(system) {}
+
+  /// f += sum over potential terms of G(q0, q1); with `jac`, adds
+  /// jac_factor * dG/dq1 (free rows only).
+  void add_potential_forces(GradientKind kind, const Vec& q0, const Vec& q1, double t0, double t1,
+                            Vec& f, Triplets* jac, double jac_factor = 1.0);
+
+  /// For every constraint l: f += lambda_l G_l(q0, q1) and, with `phi`,
+  /// phi_l = Phi_l(q1, t1). With `jac`: jac_factor * lambda_l dG_l/dq1 in the
+  /// free rows, G_l as column (lambda_col + l) in the free rows, and the exact
+  /// dPhi_l/dq(q1) as row (phi_row + l).
+  void add_constraint_forces(GradientKind kind, const Vec& q0, const Vec& q1, double t0, double t1,
+                             const Vec& lambda, Vec& f, Vec* phi, Triplets* jac, long lambda_col,
+                             long phi_row, double jac_factor = 1.0);
+
+  /// Phi(q, t), one entry per constraint.
+  void constraint_values(const Vec& q, double t, Vec& phi);
+
+  /// Exact constraint gradients at q: the rows of DPhi(q), as triplets at
+  /// (row_offset + l, col_offset + dof), each scaled by `factor`.
+  void add_constraint_jacobian(const Vec& q, double t, Triplets& out, long row_offset,
+                               long col_offset, double factor = 1.0);
+
+  /// Mass matrix entries times `factor`, free rows only, at (row, col) + offset.
+  void add_mass(Triplets& out, double factor, long offset = 0) const;
+
+ private:
+  void local(const Term& term, GradientKind kind, const Vec& q0, const Vec& q1, double t0,
+             double t1, Mat* jac);
+  void scatter_matrix(const Term& term, const Mat& k, double factor, Triplets& out) const;
+
+  const System& s_;
+  Vec ql0_, ql1_, grad_;
+  Mat jac_;
+  TermWorkspace ws_;
+};
+
+}  // namespace emdae

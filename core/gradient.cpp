@@ -1,0 +1,108 @@
+#include "core/gradient.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace emdae {
+
+void gather(const Term& term, const Vec& global, Vec& local) {
+  const auto& dofs = term.dofs();
+  local.resize(static_cast<Eigen::Index>(dofs.size()));
+  for (std::size_t i = 0; i < dofs.size(); ++i) local[static_cast<Eigen::Index>(i)] = global[dofs[i]];
+}
+
+namespace {
+
+// grad f~ (and optionally its Hessian) at pi, all blocks.
+void reduced_gradient(const Term& term, const Vec& pi, double t, Vec& g, Mat* h) {
+  const int m = term.block_size();
+  g.resize(term.n_invariants());
+  if (h) h->setZero(term.n_invariants(), term.n_invariants());
+  for (int b = 0; b < term.n_blocks(); ++b) {
+    term.block_gradient(b, pi.segment(b * m, m), t, g.segment(b * m, m));
+    if (h) term.block_hessian(b, pi.segment(b * m, m), t, h->block(b * m, b * m, m, m));
+  }
+}
+
+// Exact gradient at q (time t); jac receives its Hessian times `jac_scale`.
+void exact_gradient(const Term& term, const Vec& q, double t, double jac_scale, Vec& grad, Mat* jac,
+                    TermWorkspace& ws) {
+  term.invariants(q, ws.pim);
+  term.invariant_jacobian(q, ws.dpi_mid);
+  reduced_gradient(term, ws.pim, t, ws.g, jac ? &ws.h : nullptr);
+  grad.noalias() = ws.dpi_mid.transpose() * ws.g;
+  if (jac) {
+    jac->noalias() = ws.dpi_mid.transpose() * ws.h * ws.dpi_mid;
+    term.add_invariant_hessians(ws.g, *jac);
+    *jac *= jac_scale;
+  }
+}
+
+void discrete_gradient(const Term& term, const Vec& q0, const Vec& q1, double t0, double t1,
+                       Vec& grad, Mat* jac, TermWorkspace& ws) {
+  const double tm = 0.5 * (t0 + t1);
+  const int m = term.block_size();
+  const int n_inv = term.n_invariants();
+  ws.q_mid = 0.5 * (q0 + q1);
+  term.invariants(q0, ws.pi0);
+  term.invariants(q1, ws.pi1);
+  ws.pim = 0.5 * (ws.pi0 + ws.pi1);
+  ws.dpi = ws.pi1 - ws.pi0;
+  term.invariant_jacobian(ws.q_mid, ws.dpi_mid);
+
+  const bool quadratic = term.quadratic_in_invariants();
+  ws.g_tilde.resize(n_inv);
+  if (jac) ws.block_jac.setZero(n_inv, n_inv);
+  Vec g1(m), gm(m);
+  Mat hm(m, m);
+  for (int b = 0; b < term.n_blocks(); ++b) {
+    const auto pim = ws.pim.segment(b * m, m);
+    const auto dpi = ws.dpi.segment(b * m, m);
+    term.block_gradient(b, pim, tm, gm);
+    if (jac) term.block_hessian(b, pim, tm, hm);
+    ws.g_tilde.segment(b * m, m) = gm;
+    if (jac) ws.block_jac.block(b * m, b * m, m, m) = 0.5 * hm;
+    if (quadratic) continue;
+    const double d2 = dpi.squaredNorm();
+    const double scale =
+        std::max(ws.pi0.segment(b * m, m).norm(), ws.pi1.segment(b * m, m).norm());
+    if (d2 <= std::pow(kDiscreteGradientThreshold * scale, 2) || d2 == 0.0) continue;
+    const double f0 = term.block_value(b, ws.pi0.segment(b * m, m), tm);
+    const double f1 = term.block_value(b, ws.pi1.segment(b * m, m), tm);
+    const double c = (f1 - f0 - gm.dot(dpi)) / d2;
+    ws.g_tilde.segment(b * m, m) += c * dpi;
+    if (jac) {
+      term.block_gradient(b, ws.pi1.segment(b * m, m), tm, g1);
+      const Vec dc = (g1 - 0.5 * hm * dpi - gm - 2.0 * c * dpi) / d2;
+      auto gjac = ws.block_jac.block(b * m, b * m, m, m);
+      gjac += dpi * dc.transpose();
+      gjac.diagonal().array() += c;
+    }
+  }
+  grad.noalias() = ws.dpi_mid.transpose() * ws.g_tilde;
+  if (jac) {
+    term.invariant_jacobian(q1, ws.dpi_1);
+    jac->noalias() = ws.dpi_mid.transpose() * ws.block_jac * ws.dpi_1;
+    term.add_invariant_hessians(0.5 * ws.g_tilde, *jac);
+  }
+}
+
+}  // namespace
+
+void term_gradient(const Term& term, GradientKind kind, const Vec& q0, const Vec& q1, double t0,
+                   double t1, Vec& grad, Mat* jac, TermWorkspace& ws) {
+  switch (kind) {
+    case GradientKind::Exact:
+      exact_gradient(term, q1, t1, 1.0, grad, jac, ws);
+      return;
+    case GradientKind::Midpoint:
+      ws.q_mid = 0.5 * (q0 + q1);
+      exact_gradient(term, ws.q_mid, 0.5 * (t0 + t1), 0.5, grad, jac, ws);
+      return;
+    case GradientKind::Discrete:
+      discrete_gradient(term, q0, q1, t0, t1, grad, jac, ws);
+      return;
+  }
+}
+
+}  // namespace emdae

@@ -1,0 +1,26 @@
+// The quantities a run is judged by: energies, momentum maps, constraint
+// residuals. p = M v; angular momentum about the origin, J = sum_A q_A x p_A.
+#pragma once
+
+#include "core/system.hpp"
+
+namespace emdae {
+
+struct Quantities {
+  double kinetic = 0.0;
+  double potential = 0.0;
+  double total() const { return kinetic + potential; }
+  Vec linear_momentum;   // dim components
+  Vec angular_momentum;  // 1 component in 2D, 3 in 3D
+  double phi_max = 0.0;  // max |Phi_l(q, t)|
+};
+
+Quantities measure(const System& system, const Vec& q, const Vec& v, double t);
+
+/// Sum of the potential terms at (q, t).
+double potential_energy(const System& system, const Vec& q, double t);
+
+/// Max |Phi_l(q, t)| over the constraint terms (0 without constraints).
+double constraint_residual(const System& system, const Vec& q, double t);
+
+}  // namespace emdae

@@ -1,0 +1,97 @@
+#include "core/system.hpp"
+
+#include <stdexcept>
+#include <string>
+
+namespace emdae {
+
+System::System(int dim) : dim_(dim) {
+  if (dim != 2 && dim != 3)
+    throw std::invalid_argument("System: dimension must be 2 or 3, received " + std::to_string(dim));
+}
+
+int System::add_node(const Vec& position, const Vec& velocity) {
+  if (position.size() != dim_ || velocity.size() != dim_)
+    throw std::invalid_argument("System::add_node: position and velocity need " +
+                                std::to_string(dim_) + " components");
+  const int node = n_nodes();
+  x0_.conservativeResize(x0_.size() + dim_);
+  v0_.conservativeResize(v0_.size() + dim_);
+  x0_.tail(dim_) = position;
+  v0_.tail(dim_) = velocity;
+  is_prescribed_.resize(static_cast<std::size_t>(n_dofs()), false);
+  assembled_ = false;
+  return node;
+}
+
+void System::set_initial_velocity(int node, const Vec& velocity) {
+  v0_.segment(node * dim_, dim_) = velocity;
+}
+
+void System::add_mass(int a, int b, double m) {
+  node_mass_.emplace_back(a, b, m);
+  if (a != b) node_mass_.emplace_back(b, a, m);
+  assembled_ = false;
+}
+
+void System::add_potential(std::unique_ptr<Term> term) { potentials_.push_back(std::move(term)); }
+void System::add_constraint(std::unique_ptr<Term> term) { constraints_.push_back(std::move(term)); }
+
+void System::prescribe(PrescribedDof p) {
+  if (p.dof < 0 || p.dof >= n_dofs())
+    throw std::invalid_argument("System::prescribe: no dof " + std::to_string(p.dof));
+  if (is_prescribed_[static_cast<std::size_t>(p.dof)]) return;
+  is_prescribed_[static_cast<std::size_t>(p.dof)] = true;
+  prescribed_.push_back(std::move(p));
+}
+
+void System::fix_node(int node) {
+  for (int d = 0; d < dim_; ++d) prescribe({dof(node, d), {}, {}});
+}
+
+const SparseMatrix& System::mass() const {
+  if (!assembled_) {
+    std::vector<Eigen::Triplet<double, long>> t;
+    t.reserve(node_mass_.size() * static_cast<std::size_t>(dim_));
+    for (const auto& e : node_mass_)
+      for (int d = 0; d < dim_; ++d) t.emplace_back(e.row() * dim_ + d, e.col() * dim_ + d, e.value());
+    mass_.resize(n_dofs(), n_dofs());
+    mass_.setFromTriplets(t.begin(), t.end());
+    lumped_ = mass_ * Vec::Ones(n_dofs());
+    assembled_ = true;
+  }
+  return mass_;
+}
+
+const Vec& System::lumped_mass() const {
+  mass();
+  return lumped_;
+}
+
+Symmetry System::symmetry() const {
+  Symmetry s;
+  if (!prescribed_.empty()) return {false, false};
+  for (const auto* list : {&potentials_, &constraints_})
+    for (const auto& term : *list) {
+      const Symmetry t = term->symmetry();
+      s.translation = s.translation && t.translation;
+      s.rotation = s.rotation && t.rotation;
+    }
+  return s;
+}
+
+void System::validate() const {
+  const Vec& m = lumped_mass();
+  for (int i = 0; i < n_dofs(); ++i)
+    if (!(m[i] > 0.0))
+      throw std::invalid_argument("node " + std::to_string(i / dim_) +
+                                  " has no positive mass (lumped mass " + std::to_string(m[i]) + ")");
+  for (const auto* list : {&potentials_, &constraints_})
+    for (const auto& term : *list)
+      for (int d : term->dofs())
+        if (d < 0 || d >= n_dofs())
+          throw std::invalid_argument(term->describe() + " refers to dof " + std::to_string(d) +
+                                      " of a system with " + std::to_string(n_dofs()) + " dofs");
+}
+
+}  // namespace emdae

@@ -1,0 +1,90 @@
+// The constrained Hamiltonian system, expressed once.
+//
+//   H(q, v) = 1/2 v^T M v + V(q, t),   V = sum of potential terms,
+//   Phi(q, t) = 0,                      one row per constraint term,
+//
+// with q the nodal positions (not displacements), M constant, symmetric,
+// positive definite and made of scalar node blocks M_AB times the identity
+// (paper eq. (13)), so that p = M v and the momentum maps are those of point
+// masses. Dirichlet conditions are prescribed dofs, eliminated from the
+// unknowns of every stepper (their residual row is q_i - g_i(t)).
+#pragma once
+
+#include <Eigen/Sparse>
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "core/term.hpp"
+
+namespace emdae {
+
+using SparseMatrix = Eigen::SparseMatrix<double, Eigen::ColMajor, long>;
+
+/// A dof whose position is given: fixed (empty functions) or driven.
+struct PrescribedDof {
+  int dof = -1;
+  std::function<double(double)> position;  // g(t); empty: stays at its initial value
+  std::function<double(double)> velocity;  // g'(t); empty: zero
+};
+
+class System {
+ public:
+  /// @param dim 2 or 3. Nodes are added with add_node().
+  explicit System(int dim);
+
+  int dim() const { return dim_; }
+  int n_nodes() const { return static_cast<int>(x0_.size()) / dim_; }
+  int n_dofs() const { return static_cast<int>(x0_.size()); }
+  int dof(int node, int component) const { return node * dim_ + component; }
+
+  /// Adds a node at `position` with initial `velocity`; returns its index.
+  int add_node(const Vec& position, const Vec& velocity);
+
+  /// Adds m to the node mass matrix entry M_AB (and M_BA if A != B).
+  void add_mass(int a, int b, double m);
+
+  void add_potential(std::unique_ptr<Term> term);
+  void add_constraint(std::unique_ptr<Term> term);
+  void prescribe(PrescribedDof p);
+  void fix_node(int node);
+
+  const std::vector<std::unique_ptr<Term>>& potentials() const { return potentials_; }
+  const std::vector<std::unique_ptr<Term>>& constraints() const { return constraints_; }
+  const std::vector<PrescribedDof>& prescribed() const { return prescribed_; }
+  int n_constraints() const { return static_cast<int>(constraints_.size()); }
+
+  /// The full mass matrix (n_dofs x n_dofs), assembled on first use.
+  const SparseMatrix& mass() const;
+  /// Row sums of M per dof (the lumped mass), used to scale residuals.
+  const Vec& lumped_mass() const;
+  /// True for every prescribed dof.
+  const std::vector<bool>& is_prescribed() const { return is_prescribed_; }
+
+  const Vec& initial_positions() const { return x0_; }
+  const Vec& initial_velocities() const { return v0_; }
+  void set_initial_velocity(int node, const Vec& velocity);
+
+  /// Translation and rotation symmetry of the whole system: those of all its
+  /// terms, and none of them if a dof is prescribed.
+  Symmetry symmetry() const;
+
+  /// Throws std::invalid_argument when the system cannot be integrated
+  /// (a node without mass, a term referring to a missing dof, ...).
+  void validate() const;
+
+ private:
+  int dim_;
+  Vec x0_, v0_;
+  std::vector<Eigen::Triplet<double, long>> node_mass_;
+  std::vector<std::unique_ptr<Term>> potentials_;
+  std::vector<std::unique_ptr<Term>> constraints_;
+  std::vector<PrescribedDof> prescribed_;
+  std::vector<bool> is_prescribed_;
+  mutable SparseMatrix mass_;
+  mutable Vec lumped_;
+  mutable bool assembled_ = false;
+};
+
+}  // namespace emdae

@@ -1,0 +1,122 @@
+// A scalar function of the positions written through quadratic invariants.
+//
+// Every potential and every constraint of an emdae system is a Term:
+//
+//   f(q) = sum_b f~_b(pi_b(q)),    pi_k(q) = 1/2 q^T A_k q + b_k^T q + c_k
+//
+// over the term's local dofs. pi is quadratic in q (dot products, 2D cross
+// products, and linear parts for fixed points or dead loads), so that
+//
+//   Dpi(q_mid) (q_{n+1} - q_n) = pi(q_{n+1}) - pi(q_n)       exactly,
+//
+// which is what makes the discrete gradient of paper eqs. (34)-(35) conserve
+// energy; rotation-invariant invariants give angular momentum, translation-
+// invariant ones linear momentum. The invariants are grouped in blocks of
+// equal size over which f~ separates (one block per Gauss point of an element,
+// one per mortar segment): the discrete gradient is formed per block, which is
+// both cheaper and more accurate than one formed over the whole term.
+//
+// A Term only describes f; evaluate_term() in gradient.hpp turns the
+// description into exact, midpoint and discrete gradients with their
+// Jacobians, once for every kind of term.
+#pragma once
+
+#include <Eigen/Dense>
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace emdae {
+
+using Vec = Eigen::VectorXd;
+using Mat = Eigen::MatrixXd;
+using VecRef = Eigen::Ref<const Eigen::VectorXd>;
+
+/// Symmetries a term respects; the report uses them to decide which momenta
+/// the system conserves.
+struct Symmetry {
+  bool translation = true;
+  bool rotation = true;
+};
+
+class Term {
+ public:
+  /// @param dofs global dof indices, in the order of the local vector q.
+  /// @param n_invariants total number of invariants, a multiple of block_size.
+  Term(std::vector<int> dofs, int n_invariants, int block_size);
+  Term(std::vector<int> dofs, int block_size) : Term(std::move(dofs), 0, block_size) {}
+  virtual ~Term() = default;
+  Term(const Term&) = delete;
+  Term& operator=(const Term&) = delete;
+
+  const std::vector<int>& dofs() const { return dofs_; }
+  int n_local() const { return static_cast<int>(dofs_.size()); }
+  int n_invariants() const { return n_invariants_; }
+  int block_size() const { return block_size_; }
+  int n_blocks() const { return n_invariants_ / block_size_; }
+
+  // --- the invariants (quadratic in q) --------------------------------------
+  /// pi(q), length n_invariants().
+  virtual void invariants(const Vec& q, Vec& pi) const = 0;
+  /// Dpi(q), n_invariants() x n_local(); linear in q.
+  virtual void invariant_jacobian(const Vec& q, Mat& dpi) const = 0;
+  /// K += sum_k w_k A_k (A_k = the constant Hessian of pi_k).
+  virtual void add_invariant_hessians(const Vec& w, Mat& k) const = 0;
+
+  // --- the reduced function f~_b of one block ------------------------------
+  virtual double block_value(int block, const VecRef& pi, double t) const = 0;
+  virtual void block_gradient(int block, const VecRef& pi, double t, Eigen::Ref<Vec> g) const = 0;
+  virtual void block_hessian(int block, const VecRef& pi, double t, Eigen::Ref<Mat> h) const = 0;
+
+  /// True when every f~_b is at most quadratic in pi: then the discrete
+  /// gradient equals the gradient at pi_mid and the correction is skipped.
+  virtual bool quadratic_in_invariants() const { return false; }
+  /// True when f depends on time explicitly (driven constraints, loads).
+  virtual bool depends_on_time() const { return false; }
+  virtual Symmetry symmetry() const { return {}; }
+  /// What the term is, for messages and `emdae check`.
+  virtual std::string describe() const = 0;
+
+  /// f(q) at time t.
+  double value(const Vec& q, double t) const;
+
+ protected:
+  void set_n_invariants(int n) { n_invariants_ = n; }
+
+ private:
+  std::vector<int> dofs_;
+  int n_invariants_;
+  int block_size_;
+};
+
+/// A term whose invariants are stored as explicit quadratic forms
+/// pi_k = 1/2 q^T A_k q + b_k^T q + c_k. Convenient for small terms (springs,
+/// links, mortar segments); large elements compute their invariants directly.
+class QuadraticFormTerm : public Term {
+ public:
+  QuadraticFormTerm(std::vector<int> dofs, int block_size);
+  void add_invariant(Mat a, Vec b, double c);
+
+  void invariants(const Vec& q, Vec& pi) const override;
+  void invariant_jacobian(const Vec& q, Mat& dpi) const override;
+  void add_invariant_hessians(const Vec& w, Mat& k) const override;
+
+ private:
+  std::vector<Mat> a_;
+  std::vector<Vec> b_;
+  std::vector<double> c_;
+};
+
+/// A term given without invariants: pi = q (identity, linear), so that the
+/// generic discrete gradient becomes Gonzalez's midpoint discrete gradient in
+/// q-space. Energy is still conserved; momentum is not guaranteed.
+class CoordinateTerm : public Term {
+ public:
+  explicit CoordinateTerm(std::vector<int> dofs);
+  void invariants(const Vec& q, Vec& pi) const override { pi = q; }
+  void invariant_jacobian(const Vec& q, Mat& dpi) const override;
+  void add_invariant_hessians(const Vec&, Mat&) const override {}
+  Symmetry symmetry() const override { return {false, false}; }
+};
+
+}  // namespace emdae

@@ -1,0 +1,54 @@
+#include "integrators/driver.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+#include <stdexcept>
+
+namespace emdae {
+
+RunOutcome integrate(Stepper& stepper, State& state, const TimeSettings& time,
+                     const StepObserver& on_step, const FailureObserver& on_failure) {
+  if (!(time.dt > 0)) throw std::invalid_argument("time step must be positive");
+  const double min_dt = time.min_dt > 0 ? time.min_dt : time.dt / 1024.0;
+  const double eps = 1e-12 * std::max(1.0, std::abs(time.t_end));
+  RunOutcome out;
+  double h = time.dt;
+  int successes_at_h = 0;
+  int failures = 0;
+  while (state.t < time.t_end - eps) {
+    const double step = std::min(h, time.t_end - state.t);
+    const StepStats stats = stepper.step(state, step);
+    if (!stats.converged) {
+      ++out.cutbacks;
+      ++failures;
+      if (on_failure) on_failure(state.t, step, stats);
+      if (step / 2 < min_dt) {
+        std::ostringstream msg;
+        msg.precision(6);
+        msg << "Newton failed at t = " << state.t << " with dt = " << step << " (" << stats.iterations
+            << " iterations, residual " << stats.residual << ", " << stats.message
+            << "); no smaller step allowed (min_dt = " << min_dt << ")";
+        out.ok = false;
+        out.message = msg.str();
+        return out;
+      }
+      h = step / 2;
+      successes_at_h = 0;
+      continue;
+    }
+    ++out.steps;
+    out.newton_iterations += stats.iterations;
+    on_step(state, AcceptedStep{step, stats, failures});
+    failures = 0;
+    // Grow back towards the nominal step after a few quiet steps.
+    if (h < time.dt && ++successes_at_h >= 4) {
+      h = std::min(time.dt, 2 * h);
+      successes_at_h = 0;
+    }
+  }
+  out.message = "ok";
+  return out;
+}
+
+}  // namespace emdae

@@ -1,0 +1,206 @@
+#include "integrators/newton.hpp"
+
+#include <kinsol/kinsol.h>
+#include <nvector/nvector_serial.h>
+#include <sundials/sundials_context.h>
+#include <sunlinsol/sunlinsol_klu.h>
+#include <sunmatrix/sunmatrix_sparse.h>
+
+#include <algorithm>
+#include <cstring>
+#include <exception>
+#include <stdexcept>
+#include <vector>
+
+namespace emdae {
+
+namespace {
+
+void check(int flag, const char* call) {
+  if (flag < 0) throw std::runtime_error(std::string(call) + " failed with flag " + std::to_string(flag));
+}
+
+template <class T>
+T* check_ptr(T* p, const char* call) {
+  if (!p) throw std::runtime_error(std::string(call) + " returned NULL");
+  return p;
+}
+
+// A scaled Newton step this small is at the round-off level of O(1) unknowns.
+constexpr double kRoundOffStep = 1e-15;
+
+}  // namespace
+
+struct NewtonSolver::Impl {
+  SUNContext ctx = nullptr;
+  N_Vector u = nullptr, uscale = nullptr, fscale = nullptr;
+  SUNMatrix jmat = nullptr;
+  SUNLinearSolver ls = nullptr;
+  void* kin = nullptr;
+  int n = -1;
+
+  // Per-solve state reachable from the callbacks.
+  NewtonProblem* problem = nullptr;
+  std::exception_ptr error;
+  std::string last_message;
+  Vec x, f, scale;
+  double last_residual = 0.0;
+  SparseMatrix jac;
+  std::vector<long> outer, inner;  // pattern handed to KLU last time
+  long symbolic_analyses = 0;
+
+  Impl() { check(SUNContext_Create(nullptr, &ctx), "SUNContext_Create"); }
+  ~Impl() {
+    release();
+    if (ctx) SUNContext_Free(&ctx);
+  }
+
+  void release() {
+    if (kin) KINFree(&kin);
+    if (ls) SUNLinSolFree(ls);
+    if (jmat) SUNMatDestroy(jmat);
+    for (N_Vector* v : {&u, &uscale, &fscale})
+      if (*v) {
+        N_VDestroy(*v);
+        *v = nullptr;
+      }
+    ls = nullptr;
+    jmat = nullptr;
+    n = -1;
+    outer.clear();
+    inner.clear();
+  }
+
+  void setup(int size, const NewtonSettings& s) {
+    if (size == n) return;
+    release();
+    n = size;
+    u = check_ptr(N_VNew_Serial(n, ctx), "N_VNew_Serial");
+    uscale = check_ptr(N_VNew_Serial(n, ctx), "N_VNew_Serial");
+    fscale = check_ptr(N_VNew_Serial(n, ctx), "N_VNew_Serial");
+    N_VConst(1.0, uscale);
+    jmat = check_ptr(SUNSparseMatrix(n, n, std::max(1, n), CSC_MAT, ctx), "SUNSparseMatrix");
+    ls = check_ptr(SUNLinSol_KLU(u, jmat, ctx), "SUNLinSol_KLU");
+    kin = check_ptr(KINCreate(ctx), "KINCreate");
+    check(KINInit(kin, &Impl::residual_cb, u), "KINInit");
+    check(KINSetUserData(kin, this), "KINSetUserData");
+    check(KINSetLinearSolver(kin, ls, jmat), "KINSetLinearSolver");
+    check(KINSetJacFn(kin, &Impl::jacobian_cb), "KINSetJacFn");
+    // Exact Newton: a fresh Jacobian at every iteration.
+    check(KINSetMaxSetupCalls(kin, 1), "KINSetMaxSetupCalls");
+    check(KINSetNumMaxIters(kin, s.max_iterations), "KINSetNumMaxIters");
+    // A step stalled at round-off ends the iteration; the result is then
+    // accepted if its residual meets `tolerance` (a tolerance below the
+    // round-off of the residual would otherwise never be met).
+    check(KINSetFuncNormTol(kin, s.tolerance), "KINSetFuncNormTol");
+    check(KINSetScaledStepTol(kin, kRoundOffStep), "KINSetScaledStepTol");
+    check(KINSetMaxNewtonStep(kin, 1e100), "KINSetMaxNewtonStep");
+    check(KINSetErrHandlerFn(kin, &Impl::error_cb, this), "KINSetErrHandlerFn");
+    check(KINSetPrintLevel(kin, 0), "KINSetPrintLevel");
+  }
+
+  static void error_cb(int, const char* module, const char* function, char* msg, void* data) {
+    auto* self = static_cast<Impl*>(data);
+    self->last_message = std::string(module) + "::" + function + ": " + msg;
+  }
+
+  static int residual_cb(N_Vector uu, N_Vector fval, void* data) {
+    auto* self = static_cast<Impl*>(data);
+    try {
+      const auto len = N_VGetLength(uu);
+      self->x = Eigen::Map<const Vec>(N_VGetArrayPointer(uu), len);
+      self->problem->residual(self->x, self->f);
+      if (!self->f.allFinite()) return 1;  // recoverable: KINSOL may back off
+      Eigen::Map<Vec>(N_VGetArrayPointer(fval), len) = self->f;
+      self->last_residual = (self->f.array() * self->scale.array()).abs().maxCoeff();
+      return 0;
+    } catch (...) {
+      self->error = std::current_exception();
+      return -1;
+    }
+  }
+
+  static int jacobian_cb(N_Vector uu, N_Vector, SUNMatrix jm, void* data, N_Vector, N_Vector) {
+    auto* self = static_cast<Impl*>(data);
+    try {
+      const auto len = N_VGetLength(uu);
+      self->x = Eigen::Map<const Vec>(N_VGetArrayPointer(uu), len);
+      self->problem->jacobian(self->x, self->jac);
+      self->jac.makeCompressed();
+      self->hand_to_klu(jm);
+      return 0;
+    } catch (...) {
+      self->error = std::current_exception();
+      return -1;
+    }
+  }
+
+  void hand_to_klu(SUNMatrix jm) {
+    const long nnz = jac.nonZeros();
+    const long* op = jac.outerIndexPtr();
+    const long* ip = jac.innerIndexPtr();
+    const bool same = static_cast<long>(inner.size()) == nnz &&
+                      std::equal(op, op + n + 1, outer.begin()) && std::equal(ip, ip + nnz, inner.begin());
+    if (!same) {
+      if (SUNSparseMatrix_NNZ(jm) < nnz) check(SUNSparseMatrix_Reallocate(jm, nnz), "SUNSparseMatrix_Reallocate");
+      if (!outer.empty())
+        check(SUNLinSol_KLUReInit(ls, jm, SUNSparseMatrix_NNZ(jm), SUNKLU_REINIT_PARTIAL),
+              "SUNLinSol_KLUReInit");
+      outer.assign(op, op + n + 1);
+      inner.assign(ip, ip + nnz);
+      ++symbolic_analyses;
+    }
+    std::copy(op, op + n + 1, SUNSparseMatrix_IndexPointers(jm));
+    std::copy(ip, ip + nnz, SUNSparseMatrix_IndexValues(jm));
+    std::copy(jac.valuePtr(), jac.valuePtr() + nnz, SUNSparseMatrix_Data(jm));
+  }
+};
+
+NewtonSolver::NewtonSolver(NewtonSettings settings)
+    : settings_(settings), impl_(std::make_unique<Impl>()) {
+  if (!(settings_.tolerance > 0)) throw std::invalid_argument("Newton tolerance must be positive");
+  if (settings_.max_iterations < 1) throw std::invalid_argument("Newton max_iterations must be >= 1");
+}
+NewtonSolver::~NewtonSolver() = default;
+NewtonSolver::NewtonSolver(NewtonSolver&&) noexcept = default;
+NewtonSolver& NewtonSolver::operator=(NewtonSolver&&) noexcept = default;
+
+long NewtonSolver::n_symbolic_analyses() const { return impl_->symbolic_analyses; }
+
+NewtonResult NewtonSolver::solve(NewtonProblem& problem, Vec& x, const Vec& residual_scale) {
+  Impl& m = *impl_;
+  const int n = problem.size();
+  if (x.size() != n || residual_scale.size() != n)
+    throw std::invalid_argument("NewtonSolver::solve: vector sizes do not match the problem");
+  m.setup(n, settings_);
+  m.problem = &problem;
+  m.error = nullptr;
+  m.last_message.clear();
+  m.scale = residual_scale;
+  m.last_residual = 0.0;
+  Eigen::Map<Vec>(N_VGetArrayPointer(m.u), n) = x;
+  Eigen::Map<Vec>(N_VGetArrayPointer(m.fscale), n) = residual_scale;
+
+  const int flag = KINSol(m.kin, m.u, settings_.line_search ? KIN_LINESEARCH : KIN_NONE, m.uscale, m.fscale);
+  m.problem = nullptr;
+  if (m.error) std::rethrow_exception(m.error);
+
+  long iters = 0;
+  KINGetNumNonlinSolvIters(m.kin, &iters);
+  x = Eigen::Map<const Vec>(N_VGetArrayPointer(m.u), n);
+
+  NewtonResult r;
+  r.iterations = static_cast<int>(iters);
+  r.residual = m.last_residual;
+  char* name = KINGetReturnFlagName(flag);
+  r.message = name ? name : "KIN_UNKNOWN";
+  free(name);
+  const bool polished = flag == KIN_SUCCESS || flag == KIN_INITIAL_GUESS_OK;
+  const bool stalled_below_tolerance =
+      (flag == KIN_STEP_LT_STPTOL || flag == KIN_MAXITER_REACHED) && r.residual <= settings_.tolerance;
+  r.converged = polished || stalled_below_tolerance;
+  if (!r.converged && !m.last_message.empty()) r.message += " (" + m.last_message + ")";
+  return r;
+}
+
+}  // namespace emdae

@@ -1,0 +1,67 @@
+// The Newton solve shared by every implicit stepper: KINSOL (exact Newton,
+// optional line search) over a sparse Jacobian factored by SUNLinSol_KLU.
+//
+// The Jacobian is handed over in compressed-column form; while its pattern is
+// unchanged KLU only refactors numerically (the symbolic analysis of the first
+// factorization is reused), and when it changes (an active set moved, a
+// different system) the solver is re-initialized for a new analysis.
+// Convergence is judged on the scaled residual, max_i |s_i F_i| <= tolerance,
+// with the scale s chosen by the caller so that every row has the units of
+// the unknowns (for the mechanical steppers: length).
+#pragma once
+
+#include <memory>
+#include <string>
+
+#include "core/system.hpp"
+
+namespace emdae {
+
+class NewtonProblem {
+ public:
+  virtual ~NewtonProblem() = default;
+  virtual int size() const = 0;
+  virtual void residual(const Vec& x, Vec& f) = 0;
+  /// Fills J = dF/dx in compressed-column form; the same pattern should be
+  /// produced while the structure of the problem is unchanged.
+  virtual void jacobian(const Vec& x, SparseMatrix& j) = 0;
+};
+
+struct NewtonSettings {
+  double tolerance = 1e-10;  // on max_i |s_i F_i|
+  int max_iterations = 20;
+  bool line_search = false;
+};
+
+struct NewtonResult {
+  bool converged = false;
+  int iterations = 0;
+  double residual = 0.0;  // final max_i |s_i F_i|
+  std::string message;    // KINSOL's flag name and, on failure, its last error
+};
+
+class NewtonSolver {
+ public:
+  explicit NewtonSolver(NewtonSettings settings = {});
+  ~NewtonSolver();
+  NewtonSolver(NewtonSolver&&) noexcept;
+  NewtonSolver& operator=(NewtonSolver&&) noexcept;
+  NewtonSolver(const NewtonSolver&) = delete;
+  NewtonSolver& operator=(const NewtonSolver&) = delete;
+
+  /// Solves F(x) = 0 starting from x; on return x holds the last iterate.
+  /// Exceptions thrown by the problem's callbacks are rethrown here, after
+  /// KINSOL has returned (they never cross the C library).
+  NewtonResult solve(NewtonProblem& problem, Vec& x, const Vec& residual_scale);
+
+  const NewtonSettings& settings() const { return settings_; }
+  /// Number of symbolic (pattern) analyses KLU performed so far.
+  long n_symbolic_analyses() const;
+
+ private:
+  struct Impl;
+  NewtonSettings settings_;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace emdae

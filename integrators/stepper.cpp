@@ -1,0 +1,33 @@
+#include "integrators/stepper.hpp"
+
+#include <stdexcept>
+
+#include "integrators/energy_momentum.hpp"
+#include "integrators/implicit_midpoint.hpp"
+
+namespace emdae {
+
+State initial_state(const System& system) {
+  State s;
+  s.q = system.initial_positions();
+  s.v = system.initial_velocities();
+  for (const auto& p : system.prescribed()) {
+    if (p.position) s.q[p.dof] = p.position(0.0);
+    s.v[p.dof] = p.velocity ? p.velocity(0.0) : 0.0;
+  }
+  s.lambda = Vec::Zero(system.n_constraints());
+  return s;
+}
+
+std::vector<std::string> known_schemes() { return {"em", "midpoint"}; }
+
+std::unique_ptr<Stepper> make_stepper(const std::string& name, const System& system,
+                                      const NewtonSettings& newton) {
+  if (name == "em") return std::make_unique<EnergyMomentumStepper>(system, newton);
+  if (name == "midpoint") return std::make_unique<ImplicitMidpointStepper>(system, newton);
+  std::string known;
+  for (const auto& k : known_schemes()) known += (known.empty() ? "" : ", ") + k;
+  throw std::invalid_argument("unknown scheme '" + name + "' (known: " + known + ")");
+}
+
+}  // namespace emdae
