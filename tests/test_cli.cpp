@@ -1,0 +1,403 @@
+// The emdae command, run as users run it (the built executable, through a
+// shell): exit codes, what is written and what is not, the documented file
+// formats; and the writers of verify/ it is built on.
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "cli/scene.hpp"
+#include "integrators/stepper.hpp"
+#include "verify/history.hpp"
+#include "verify/recorder.hpp"
+#include "verify/summary.hpp"
+
+namespace emdae {
+namespace {
+
+namespace fs = std::filesystem;
+
+const std::string kExe = EMDAE_EXE;
+
+std::string example(const std::string& name) {
+  return std::string(EMDAE_EXAMPLES_DIR) + "/" + name + ".toml";
+}
+
+std::string quote(const std::string& s) {
+  return "'" + s + "'";
+}
+
+struct Result {
+  int code = -1;
+  std::string output;  // stdout and stderr together
+};
+
+// Runs `args` through the shell from folder `cwd`.
+Result emdae(const std::string& args, const fs::path& cwd = fs::temp_directory_path()) {
+  const std::string cmd = "cd " + quote(cwd.string()) + " && " + quote(kExe) + " " + args + " 2>&1";
+  Result r;
+  FILE* pipe = ::popen(cmd.c_str(), "r");
+  if (!pipe) return r;
+  char buffer[4096];
+  std::size_t n;
+  while ((n = std::fread(buffer, 1, sizeof buffer, pipe)) > 0) r.output.append(buffer, n);
+  const int status = ::pclose(pipe);
+  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  return r;
+}
+
+class TempDir {
+ public:
+  TempDir() {
+    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+    // The process id keeps concurrent runs (two build trees) apart.
+    std::string name = std::string("emdae_cli_") + std::to_string(::getpid()) + "_" +
+                       info->test_suite_name() + "_" + info->name();
+    for (char& c : name)
+      if (c == '/') c = '_';
+    path_ = fs::temp_directory_path() / name;
+    fs::remove_all(path_);
+    fs::create_directories(path_);
+  }
+  ~TempDir() {
+    std::error_code ec;
+    fs::remove_all(path_, ec);
+  }
+  std::string write(const std::string& file, const std::string& content) const {
+    std::ofstream(path_ / file, std::ios::binary) << content;
+    return (path_ / file).string();
+  }
+  const fs::path& path() const { return path_; }
+  std::string operator/(const std::string& p) const { return (path_ / p).string(); }
+
+ private:
+  fs::path path_;
+};
+
+nlohmann::json read_json(const std::string& path) {
+  std::ifstream in(path);
+  return nlohmann::json::parse(in);
+}
+
+std::vector<std::string> read_lines(const std::string& path) {
+  std::ifstream in(path);
+  std::vector<std::string> lines;
+  for (std::string line; std::getline(in, line);) lines.push_back(line);
+  return lines;
+}
+
+std::string join(const std::vector<std::string>& v) {
+  std::string out;
+  for (const auto& s : v) out += (out.empty() ? "" : ",") + s;
+  return out;
+}
+
+const char* kHeader2D =
+    "t,dt,kinetic,potential,total_energy,Lx,Ly,J,phi_max,newton_iterations,cutbacks";
+const char* kHeader3D =
+    "t,dt,kinetic,potential,total_energy,Lx,Ly,Lz,J,Jx,Jy,Jz,phi_max,newton_iterations,cutbacks";
+
+const std::string kValid =
+    "[time]\ndt = 0.01\nt_end = 0.1\n\n"
+    "[[particles]]\nname = \"a\"\nmass = 1.0\nposition = [0.0, 0.0]\n\n"
+    "[[particles]]\nname = \"b\"\nmass = 1.0\nposition = [1.0, 0.0]\n\n";
+
+// --- the program's surface ------------------------------------------------------
+
+TEST(Cli, VersionAndHelp) {
+  Result r = emdae("--version");
+  EXPECT_EQ(r.code, 0);
+  EXPECT_NE(r.output.find(EMDAE_VERSION), std::string::npos) << r.output;
+  r = emdae("--help");
+  EXPECT_EQ(r.code, 0);
+  for (const char* s : {"run", "check", "Exit codes", "bad input", "failed numerically"})
+    EXPECT_NE(r.output.find(s), std::string::npos) << s << " in\n" << r.output;
+  r = emdae("run --help");
+  EXPECT_EQ(r.code, 0);
+  for (const char* s : {"--scheme", "--dt", "--t-end", "--out", "--set", "--quiet"})
+    EXPECT_NE(r.output.find(s), std::string::npos) << s;
+}
+
+TEST(Cli, UnknownOptionOrCommandIsBadInput) {
+  EXPECT_EQ(emdae("--frobnicate").code, 2);
+  EXPECT_EQ(emdae("frobnicate").code, 2);
+  EXPECT_EQ(emdae("run").code, 2);  // no scene
+}
+
+// --- bad input: exit 2, a located message, nothing written -----------------------
+
+struct BadScene {
+  std::string name, content;
+  int line;
+  std::string expected;
+};
+
+void PrintTo(const BadScene& c, std::ostream* os) {
+  *os << c.name;
+}
+
+class BadInput : public ::testing::TestWithParam<BadScene> {};
+
+TEST_P(BadInput, ExitsTwoAndCreatesNoOutput) {
+  const BadScene& c = GetParam();
+  TempDir dir;
+  const std::string path = dir.write(c.name + ".toml", c.content);
+  for (const std::string& args :
+       {"run " + quote(path) + " --out " + quote(dir / "out-explicit"), "run " + quote(path)}) {
+    const Result r = emdae(args, dir.path());
+    EXPECT_EQ(r.code, 2) << r.output;
+    EXPECT_NE(r.output.find(path + ":" + std::to_string(c.line) + ":"), std::string::npos)
+        << r.output;
+    EXPECT_NE(r.output.find(c.expected), std::string::npos) << r.output;
+  }
+  EXPECT_FALSE(fs::exists(dir / "out-explicit"));
+  EXPECT_FALSE(fs::exists(dir / "out"));
+  const Result r = emdae("check " + quote(path), dir.path());
+  EXPECT_EQ(r.code, 2) << r.output;
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    Scenes, BadInput,
+    ::testing::Values(BadScene{"negative_dt", "[time]\ndt = -0.1\nt_end = 1\n", 2,
+                               "key 'time.dt': must be positive, received -0.1"},
+                      BadScene{"t_end_below_dt", "[time]\ndt = 0.1\nt_end = 0.01\n", 3,
+                               "key 'time.t_end': must be at least dt = 0.1, received 0.01"},
+                      BadScene{"unknown_key", kValid + "[scheme]\nnewton_tol = 1e-8\n", 16,
+                               "did you mean 'newton_tolerance'?"},
+                      BadScene{"unknown_particle", kValid + "[[links]]\nbetween = [\"a\", \"x\"]\n",
+                               16, "received \"x\""},
+                      BadScene{"wrong_length", kValid + "[gravity]\nacceleration = [1.0]\n", 16,
+                               "received [1.0]"},
+                      BadScene{"bad_scheme", kValid + "[scheme]\nname = \"rk4\"\n", 16,
+                               "received \"rk4\""},
+                      BadScene{"empty", "", 1, "empty"},
+                      BadScene{"binary", std::string("\0\x01\x02", 3), 1, "not a text file"}),
+    [](const auto& param_info) { return param_info.param.name; });
+
+TEST(Cli, MissingSceneFile) {
+  TempDir dir;
+  const Result r = emdae("run " + quote(dir / "nope.toml"), dir.path());
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.output.find("nope.toml"), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(dir / "out"));
+}
+
+TEST(Cli, UnknownSchemeListsKnownOnes) {
+  TempDir dir;
+  const Result r = emdae("run " + quote(example("double_pendulum")) + " --scheme rk4", dir.path());
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.output.find("--scheme rk4"), std::string::npos) << r.output;
+  for (const auto& s : known_schemes()) EXPECT_NE(r.output.find(s), std::string::npos) << s;
+  EXPECT_FALSE(fs::exists(dir / "out"));
+}
+
+TEST(Cli, BadOverridesAreBadInput) {
+  TempDir dir;
+  const std::string scene = quote(example("double_pendulum"));
+  for (const char* args : {"--dt -1", "--t-end 0.001", "--set time.dtt=0.1",
+                           "--set 'particles[9].mass=1'", "--set nonsense"}) {
+    const Result r = emdae("run " + scene + " " + args, dir.path());
+    EXPECT_EQ(r.code, 2) << args << "\n" << r.output;
+  }
+  EXPECT_FALSE(fs::exists(dir / "out"));
+}
+
+// --- runs -----------------------------------------------------------------------
+
+TEST(Cli, RunWritesSummaryAndHistory) {
+  TempDir dir;
+  const Result r = emdae("run " + quote(example("four_particle")) + " --out " + quote(dir / "o"));
+  ASSERT_EQ(r.code, 0) << r.output;
+  EXPECT_NE(r.output.find("status"), std::string::npos);  // the table
+
+  const nlohmann::json s = read_json(dir / "o/summary.json");
+  for (const char* key :
+       {"scene", "scheme", "dt", "t_end", "steps", "newton_iterations",
+        "newton_iterations_max_per_step", "cutbacks", "cpu_seconds", "energy_rel_error_max",
+        "linear_momentum_error_max", "angular_momentum_rel_error_max", "constraint_residual_max",
+        "status", "dofs", "constraints"})
+    EXPECT_TRUE(s.contains(key)) << key;
+  EXPECT_EQ(s["status"], "ok");
+  EXPECT_EQ(s["scene"], "four_particle");
+  EXPECT_EQ(s["scheme"], "em");
+  EXPECT_EQ(s["dofs"], 12);
+  EXPECT_EQ(s["constraints"], 2);
+  EXPECT_EQ(s["steps"], 500);
+  EXPECT_LT(s["energy_rel_error_max"].get<double>(), 1e-8);
+  ASSERT_TRUE(s["linear_momentum_error_max"].is_number());
+  EXPECT_LT(s["linear_momentum_error_max"].get<double>(), 1e-10);
+  ASSERT_TRUE(s["angular_momentum_rel_error_max"].is_number());
+  EXPECT_LT(s["angular_momentum_rel_error_max"].get<double>(), 1e-10);
+  EXPECT_LT(s["constraint_residual_max"].get<double>(), 1e-9);
+  EXPECT_EQ(s["checks_pass"], true);
+  EXPECT_FALSE(fs::exists(dir / "o/summary.json.tmp"));
+
+  const auto lines = read_lines(dir / "o/history.csv");
+  ASSERT_EQ(lines.size(), 1u + 1u + 500u);  // header, initial state, every step
+  EXPECT_EQ(lines[0], kHeader3D);
+  std::stringstream last(lines.back());
+  std::vector<double> row;
+  for (std::string cell; std::getline(last, cell, ',');) row.push_back(std::stod(cell));
+  ASSERT_EQ(row.size(), 15u);
+  EXPECT_NEAR(row[0], 5.0, 1e-9);
+}
+
+TEST(Cli, TwoDimensionalHistoryAndOverrides) {
+  TempDir dir;
+  const Result r = emdae("run " + quote(example("double_pendulum")) +
+                         " --t-end 1 --set time.dt=0.02 --set output.every=10 --quiet --out " +
+                         quote(dir / "o"));
+  ASSERT_EQ(r.code, 0) << r.output;
+  EXPECT_TRUE(r.output.empty()) << r.output;  // --quiet
+  const nlohmann::json s = read_json(dir / "o/summary.json");
+  EXPECT_EQ(s["dt"], 0.02);
+  EXPECT_EQ(s["t_end"], 1.0);
+  EXPECT_EQ(s["steps"], 50);
+  // Anchored and in gravity: momenta are not conserved, and say why.
+  EXPECT_TRUE(s["linear_momentum_error_max"].is_null());
+  EXPECT_NE(s["linear_momentum_note"].get<std::string>().find("not conserved"), std::string::npos);
+  EXPECT_TRUE(s["angular_momentum_rel_error_max"].is_null());
+  const auto lines = read_lines(dir / "o/history.csv");
+  EXPECT_EQ(lines[0], kHeader2D);
+  EXPECT_EQ(lines.size(), 1u + 1u + 5u);  // header, t = 0, every 10th of 50 steps
+}
+
+TEST(Cli, DefaultOutputFolderIsSceneAndScheme) {
+  TempDir dir;
+  const Result r =
+      emdae("run " + quote(example("elastic_pendulum")) + " --scheme midpoint --t-end 0.1 -q",
+            dir.path());
+  ASSERT_EQ(r.code, 0) << r.output;
+  EXPECT_TRUE(fs::exists(dir / "out/elastic_pendulum-midpoint/summary.json"));
+  EXPECT_TRUE(fs::exists(dir / "out/elastic_pendulum-midpoint/history.csv"));
+}
+
+TEST(Cli, NoArgumentsRunsTheBuiltInDefaultScene) {
+  TempDir dir;
+  const Result r = emdae("", dir.path());
+  ASSERT_EQ(r.code, 0) << r.output;
+  const nlohmann::json s = read_json(dir / "out/default/summary.json");
+  EXPECT_EQ(s["status"], "ok");
+  EXPECT_EQ(s["scene"], "double_pendulum");
+  EXPECT_EQ(s["scheme"], "em");
+  EXPECT_LT(s["energy_rel_error_max"].get<double>(), 1e-8);
+  EXPECT_EQ(read_lines(dir / "out/default/history.csv")[0], kHeader2D);
+}
+
+TEST(Cli, NumericalFailureExitsThreeAndKeepsTheRecord) {
+  TempDir dir;
+  // One Newton iteration and no cut-back allowed: the first step must fail.
+  const Result r = emdae("run " + quote(example("stiff_pendulum")) +
+                         " --set scheme.newton_max_iterations=1 --set time.min_dt=0.05 --out " +
+                         quote(dir / "o"));
+  EXPECT_EQ(r.code, 3) << r.output;
+  const nlohmann::json s = read_json(dir / "o/summary.json");
+  EXPECT_NE(s["status"].get<std::string>().find("Newton failed"), std::string::npos) << s;
+  const auto lines = read_lines(dir / "o/history.csv");
+  ASSERT_GE(lines.size(), 2u);  // header and the initial state
+  EXPECT_EQ(lines[0], kHeader2D);
+}
+
+TEST(Cli, FailedToleranceCheckExitsFour) {
+  TempDir dir;
+  const Result r =
+      emdae("run " + quote(example("four_particle")) +
+            " --t-end 0.1 --set tolerances.energy_rel=1e-300 --out " + quote(dir / "o"));
+  EXPECT_EQ(r.code, 4) << r.output;
+  const nlohmann::json s = read_json(dir / "o/summary.json");
+  EXPECT_EQ(s["status"], "ok");
+  EXPECT_EQ(s["checks"]["energy_rel"]["result"], "fail");
+  EXPECT_EQ(s["checks_pass"], false);
+}
+
+TEST(Cli, CheckShowsWhatWouldBeBuiltAndWritesNothing) {
+  TempDir dir;
+  const Result r = emdae("check " + quote(example("double_pendulum")), dir.path());
+  ASSERT_EQ(r.code, 0) << r.output;
+  for (const char* s : {"nodes", "dofs", "constraints", "anchor link 1", "rigid link 1",
+                        "dead load 2", "em", "dt = 0.01"})
+    EXPECT_NE(r.output.find(s), std::string::npos) << s << " in\n" << r.output;
+  EXPECT_TRUE(fs::is_empty(dir.path()));
+}
+
+// --- the writers of verify/ ---------------------------------------------------------
+
+TEST(Verify, HistoryColumns) {
+  EXPECT_EQ(join(history_columns(2)), kHeader2D);
+  EXPECT_EQ(join(history_columns(3)), kHeader3D);
+  EXPECT_EQ(join(history_columns(2, true)),
+            "t,dt,kinetic,potential,total_energy,external_work,Lx,Ly,J,phi_max,"
+            "newton_iterations,cutbacks");
+}
+
+TEST(Verify, RecorderMeasuresAndExplains) {
+  const auto scene = load_scene(example("double_pendulum"));
+  const System& s = *scene->system;
+  State state = initial_state(s);
+  Recorder rec(s, state);
+  EXPECT_FALSE(rec.linear_momentum_error_max().has_value());
+  EXPECT_NE(rec.conservation().linear_reason.find("dead load"), std::string::npos);
+  EXPECT_NE(rec.conservation().angular_reason.find("anchor link"), std::string::npos);
+  EXPECT_EQ(rec.steps(), 0);
+
+  // A fake step that changes the energy by 1 % of its scale.
+  State moved = state;
+  moved.t = 0.1;
+  const Quantities q0 = measure(s, state.q, state.v, 0.0);
+  const double scale = std::max(std::abs(q0.total()), q0.kinetic + std::abs(q0.potential));
+  moved.v[0] = std::sqrt(2 * 0.01 * scale / 1.0);  // upper particle, mass 1: T = 0.01 scale
+  StepStats stats;
+  stats.converged = true;
+  stats.iterations = 3;
+  rec.observe(moved, AcceptedStep{0.1, stats, 1});
+  EXPECT_NEAR(rec.energy_rel_error_max(), 0.01, 1e-12);
+  EXPECT_EQ(rec.steps(), 1);
+  EXPECT_EQ(rec.newton_iterations(), 3);
+  EXPECT_EQ(rec.newton_iterations_max_per_step(), 3);
+  EXPECT_EQ(rec.cutbacks(), 1);
+
+  // External work that accounts for the change removes the error.
+  Recorder balanced(s, state, [scale](const State& st) { return st.t > 0 ? 0.01 * scale : 0.0; });
+  balanced.observe(moved, AcceptedStep{0.1, stats, 0});
+  EXPECT_NEAR(balanced.energy_rel_error_max(), 0.0, 1e-12);
+}
+
+TEST(Verify, SummaryIsWrittenAtomicallyWithNulls) {
+  TempDir dir;
+  const auto scene = load_scene(example("elastic_pendulum"));
+  const System& s = *scene->system;
+  Recorder rec(s, initial_state(s));
+  RunInfo info;
+  info.scene = "x";
+  info.scheme = "em";
+  info.status = "ok";
+  Tolerances tol;
+  tol.energy_rel = 1e-6;
+  tol.linear_momentum = 1e-6;
+  const Summary summary = summarize(info, s, rec, tol);
+  write_summary(dir / "summary.json", summary);
+  const nlohmann::json j = read_json(dir / "summary.json");
+  EXPECT_TRUE(j["linear_momentum_error_max"].is_null());
+  EXPECT_NE(j["linear_momentum_note"].get<std::string>().find("fixed dofs"), std::string::npos);
+  EXPECT_EQ(j["checks"]["energy_rel"]["result"], "pass");
+  EXPECT_EQ(j["checks"]["linear_momentum"]["result"], "skipped");
+  EXPECT_EQ(j["dofs"], 4);
+  EXPECT_EQ(j["free_dofs"], 2);
+  // Only the summary is left: the temporary file was renamed into place.
+  int files = 0;
+  for (const auto& e : fs::directory_iterator(dir.path())) {
+    (void)e;
+    ++files;
+  }
+  EXPECT_EQ(files, 1);
+}
+
+}  // namespace
+}  // namespace emdae

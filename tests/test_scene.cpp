@@ -1,0 +1,536 @@
+// Scene files: every malformed input gets a SceneError naming the place
+// (FILE:LINE), the key and the value received; every example scene loads and
+// builds what it says; command-line overrides are validated like the file.
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include "cli/scene.hpp"
+#include "integrators/stepper.hpp"
+#include "verify/recorder.hpp"
+
+namespace emdae {
+namespace {
+
+namespace fs = std::filesystem;
+
+// A fresh folder per test, removed afterwards.
+class TempDir {
+ public:
+  TempDir() {
+    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+    // The process id keeps concurrent runs (two build trees) apart.
+    std::string name = std::string("emdae_scene_") + std::to_string(::getpid()) + "_" +
+                       info->test_suite_name() + "_" + info->name();
+    for (char& c : name)
+      if (c == '/') c = '_';
+    path_ = fs::temp_directory_path() / name;
+    fs::remove_all(path_);
+    fs::create_directories(path_);
+  }
+  ~TempDir() {
+    std::error_code ec;
+    fs::remove_all(path_, ec);
+  }
+  std::string write(const std::string& file, const std::string& content) const {
+    const fs::path p = path_ / file;
+    std::ofstream(p, std::ios::binary) << content;
+    return p.string();
+  }
+  const fs::path& path() const { return path_; }
+
+ private:
+  fs::path path_;
+};
+
+const std::string kTime = "[time]\ndt = 0.01\nt_end = 0.1\n\n";
+const std::string kParticles =
+    "[[particles]]\n"
+    "name = \"a\"\n"
+    "mass = 1.0\n"
+    "position = [0.0, 0.0]\n"
+    "\n"
+    "[[particles]]\n"
+    "name = \"b\"\n"
+    "mass = 1.0\n"
+    "position = [1.0, 0.0]\n"
+    "\n";
+const std::string kValid = kTime + kParticles;
+
+std::string known_list() {
+  std::string k;
+  for (const auto& s : known_schemes()) k += (k.empty() ? "" : ", ") + s;
+  return k;
+}
+
+// 1-based line of the first line of `content` containing `marker`.
+int line_of(const std::string& content, const std::string& marker) {
+  const auto at = content.find(marker);
+  if (at == std::string::npos) return -1;
+  return 1 + static_cast<int>(std::count(content.begin(), content.begin() + at, '\n'));
+}
+
+struct Malformed {
+  std::string name;  // the file is <name>.toml
+  std::string content;
+  std::string marker;  // the message must point at the line holding this ("" : no line)
+  std::vector<std::string> expected;  // substrings of the message
+};
+
+std::vector<Malformed> malformed_scenes() {
+  const std::string p = kParticles;
+  return {
+      {"negative_dt",
+       "[time]\ndt = -0.1\nt_end = 1.0\n" + p,
+       "dt = -0.1",
+       {"key 'time.dt'", "must be positive", "received -0.1"}},
+      {"zero_dt", "[time]\ndt = 0\nt_end = 1.0\n" + p, "dt = 0", {"key 'time.dt'", "received 0"}},
+      {"t_end_below_dt",
+       "[time]\ndt = 0.1\nt_end = 0.05\n" + p,
+       "t_end",
+       {"key 'time.t_end'", "at least dt = 0.1", "received 0.05"}},
+      {"min_dt_above_dt",
+       "[time]\ndt = 0.1\nt_end = 1\nmin_dt = 0.5\n" + p,
+       "min_dt",
+       {"key 'time.min_dt'", "received 0.5"}},
+      {"dt_is_string",
+       "[time]\ndt = \"fast\"\nt_end = 1\n" + p,
+       "dt =",
+       {"key 'time.dt'", "must be a number", "received string \"fast\""}},
+      {"dt_missing", "[time]\nt_end = 1\n" + p, "[time]", {"key 'time.dt'", "missing"}},
+      {"time_missing", p, "", {"key 'time'", "missing"}},
+      {"unknown_key",
+       "[time]\ndtt = 0.1\nt_end = 1\n" + p,
+       "dtt",
+       {"key 'time.dtt'", "unknown key", "did you mean 'dt'?", "received 0.1"}},
+      {"unknown_section",
+       kValid + "[gravty]\nacceleration = [0.0, -1.0]\n",
+       "[gravty]",
+       {"key 'gravty'", "did you mean 'gravity'?"}},
+      {"unknown_scheme",
+       kValid + "[scheme]\nname = \"rk45\"\n",
+       "rk45",
+       {"key 'scheme.name'", "unknown scheme", "received \"rk45\"", known_list()}},
+      {"misspelt_scheme",
+       kValid + "[scheme]\nname = \"midpont\"\n",
+       "midpont",
+       {"key 'scheme.name'", "did you mean 'midpoint'?", "received \"midpont\""}},
+      {"unknown_particle",
+       kValid + "[[springs]]\nbetween = [\"a\", \"c\"]\nstiffness = 1.0\n",
+       "between",
+       {"key 'springs[0].between'", "unknown particle", "received \"c\""}},
+      {"unknown_anchor_particle",
+       kValid + "[[anchors]]\nparticle = \"z\"\npoint = [0.0, 1.0]\n",
+       "\"z\"",
+       {"key 'anchors[0].particle'", "unknown particle", "received \"z\""}},
+      {"position_too_long",
+       kValid + "[[particles]]\nname = \"c\"\nmass = 1.0\nposition = [0.0, 0.0, 1.0]\n",
+       "[0.0, 0.0, 1.0]",
+       {"key 'particles[2].position'", "2 numbers", "received [0.0, 0.0, 1.0]"}},
+      {"velocity_is_string",
+       kValid +
+           "[[particles]]\nname = \"c\"\nmass = 1.0\nposition = [0.0, 2.0]\nvelocity = \"up\"\n",
+       "velocity",
+       {"key 'particles[2].velocity'", "received string \"up\""}},
+      {"duplicate_particle",
+       kValid + "[[particles]]\nname = \"a\"\nmass = 1.0\nposition = [2.0, 0.0]\n",
+       "name = \"a\"\nmass = 1.0\nposition = [2.0",
+       {"key 'particles[2].name'", "duplicate particle name", "received \"a\"", "{path}:5:"}},
+      {"zero_mass",
+       kValid + "[[particles]]\nname = \"c\"\nmass = 0\nposition = [2.0, 0.0]\n",
+       "mass = 0",
+       {"key 'particles[2].mass'", "must be positive", "received 0"}},
+      {"negative_mass",
+       kValid + "[[particles]]\nname = \"c\"\nmass = -2.5\nposition = [2.0, 0.0]\n",
+       "mass = -2.5",
+       {"key 'particles[2].mass'", "received -2.5"}},
+      {"mass_missing",
+       kTime + "[[particles]]\nname = \"a\"\nposition = [0.0, 0.0]\n",
+       "[[particles]]",
+       {"key 'particles[0].mass'", "missing"}},
+      {"self_link",
+       kValid + "[[links]]\nbetween = [\"a\", \"a\"]\n",
+       "between",
+       {"key 'links[0].between'", "two different particles", "received [\"a\", \"a\"]"}},
+      {"link_length_mismatch",
+       kValid + "[[links]]\nbetween = [\"a\", \"b\"]\nlength = 2.0\n",
+       "length = 2.0",
+       {"key 'links[0].length'", "initial distance 1.0", "received 2.0"}},
+      {"duplicate_link",
+       kValid + "[[links]]\nbetween = [\"a\", \"b\"]\n\n[[links]]\nbetween = [\"b\", \"a\"]\n",
+       "[\"b\", \"a\"]",
+       {"key 'links[1].between'", "second rigid link", "received [\"b\", \"a\"]"}},
+      {"between_not_a_pair",
+       kValid + "[[springs]]\nbetween = [\"a\"]\nstiffness = 1.0\n",
+       "between",
+       {"key 'springs[0].between'", "two particle names", "received array [\"a\"]"}},
+      {"spring_law_unknown",
+       kValid + "[[springs]]\nbetween = [\"a\", \"b\"]\nstiffness = 1.0\nlaw = \"grean\"\n",
+       "grean",
+       {"key 'springs[0].law'", "did you mean 'green'?", "received \"grean\""}},
+      {"spring_key_misspelt",
+       kValid + "[[springs]]\nbetween = [\"a\", \"b\"]\nstifness = 1.0\n",
+       "stifness",
+       {"key 'springs[0].stifness'", "did you mean 'stiffness'?", "received 1.0"}},
+      {"spring_stiffness_missing",
+       kValid + "[[springs]]\nbetween = [\"a\", \"b\"]\n",
+       "[[springs]]",
+       {"key 'springs[0].stiffness'", "missing"}},
+      {"dimension_four",
+       "[scene]\ndimension = 4\n" + kValid,
+       "dimension",
+       {"key 'scene.dimension'", "2 or 3", "received 4"}},
+      {"iterations_float",
+       kValid + "[scheme]\nnewton_max_iterations = 2.5\n",
+       "newton_max",
+       {"key 'scheme.newton_max_iterations'", "integer", "received float 2.5"}},
+      {"iterations_zero",
+       kValid + "[scheme]\nnewton_max_iterations = 0\n",
+       "newton_max",
+       {"key 'scheme.newton_max_iterations'", "received 0"}},
+      {"line_search_string",
+       kValid + "[scheme]\nline_search = \"yes\"\n",
+       "line_search",
+       {"key 'scheme.line_search'", "true or false", "received string \"yes\""}},
+      {"particles_not_array",
+       kTime + "[particles]\nname = \"a\"\n",
+       "[particles]",
+       {"key 'particles'", "array of tables", "received a table"}},
+      {"gravity_nan",
+       kValid + "[gravity]\nacceleration = [nan, 0.0]\n",
+       "acceleration",
+       {"key 'gravity.acceleration'", "finite", "received [nan, 0.0]"}},
+      {"gravity_wrong_length",
+       kValid + "[gravity]\nacceleration = [0.0, -9.81, 0.0]\n",
+       "acceleration",
+       {"key 'gravity.acceleration'", "received [0.0, -9.81, 0.0]"}},
+      {"output_every_zero",
+       kValid + "[output]\nevery = 0\n",
+       "every",
+       {"key 'output.every'", "received 0"}},
+      {"tolerance_negative",
+       kValid + "[tolerances]\nenergy_rel = -1e-9\n",
+       "energy_rel",
+       {"key 'tolerances.energy_rel'", "received -1e-09"}},
+      {"scene_name_path",
+       "[scene]\nname = \"../x\"\n" + kValid,
+       "name",
+       {"key 'scene.name'", "plain name", "received \"../x\""}},
+      {"particle_key_misspelt",
+       kTime + "[[particles]]\nname = \"a\"\nmas = 1.0\nposition = [0.0, 0.0]\n",
+       "mas =",
+       {"key 'particles[0].mas'", "did you mean 'mass'?", "received 1.0"}},
+      {"anchor_on_fixed",
+       kTime + "[[particles]]\nname = \"a\"\nposition = [0.0, 0.0]\nfixed = true\n" +
+           "[[particles]]\nname = \"b\"\nmass = 1.0\nposition = [1.0, 0.0]\n" +
+           "[[anchors]]\nparticle = \"a\"\npoint = [0.0, 1.0]\n",
+       "particle = \"a\"",
+       {"key 'anchors[0].particle'", "fixed", "received \"a\""}},
+      {"all_fixed",
+       kTime + "[[particles]]\nname = \"a\"\nposition = [0.0, 0.0]\nfixed = true\n",
+       "[[particles]]",
+       {"key 'particles'", "every particle is fixed"}},
+      {"coincident_spring",
+       kValid + "[[particles]]\nname = \"c\"\nmass = 1.0\nposition = [0.0, 0.0]\n" +
+           "[[springs]]\nbetween = [\"a\", \"c\"]\nstiffness = 1.0\n",
+       "[[springs]]",
+       {"key 'springs[0].rest_length'", "same point"}},
+      {"syntax_error", "[time\ndt = 0.1\n", "[time", {"TOML syntax error"}},
+      {"redefined_key",
+       "[time]\ndt = 0.1\ndt = 0.2\nt_end = 1\n" + p,
+       "dt = 0.2",
+       {"cannot redefine"}},
+      {"empty_file", "", "", {"empty"}},
+      {"only_comments", "# nothing here\n\n", "", {"empty"}},
+      {"binary_file",
+       std::string("\x7f"
+                   "ELF\x02\x01\x01\0\0\0\0",
+                   12) +
+           "junk",
+       "ELF",
+       {"not a text file"}},
+      {"not_utf8", "[scene]\nname = \"caf\xe9\"\n", "name", {"not UTF-8"}},
+  };
+}
+
+void PrintTo(const Malformed& c, std::ostream* os) {
+  *os << c.name;
+}
+
+class MalformedScene : public ::testing::TestWithParam<Malformed> {};
+
+TEST_P(MalformedScene, ErrorNamesFileLineKeyAndValue) {
+  const Malformed& c = GetParam();
+  TempDir dir;
+  const std::string file = c.name + ".toml";
+  const std::string path = dir.write(file, c.content);
+  try {
+    load_scene(path);
+    FAIL() << c.name << ": no SceneError";
+  } catch (const SceneError& e) {
+    const std::string msg = e.what();
+    // The place: FILE:LINE (the whole file when it has no keys at all).
+    const int line = c.marker.empty() ? 1 : line_of(c.content, c.marker);
+    ASSERT_GT(line, 0) << "bad test: marker not in content";
+    EXPECT_NE(msg.find(path + ":" + std::to_string(line) + ":"), std::string::npos)
+        << "expected " << path << ":" << line << ": in\n  " << msg;
+    for (std::string want : c.expected) {
+      if (want.rfind("{path}", 0) == 0) want = path + want.substr(6);
+      EXPECT_NE(msg.find(want), std::string::npos) << "expected '" << want << "' in\n  " << msg;
+    }
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(Scenes, MalformedScene, ::testing::ValuesIn(malformed_scenes()),
+                         [](const auto& param_info) { return param_info.param.name; });
+
+TEST(Scene, MalformedCasesAreMany) {
+  EXPECT_GE(malformed_scenes().size(), 20u);
+}
+
+TEST(Scene, MissingFileNamesThePath) {
+  const std::string path = (fs::temp_directory_path() / "emdae_no_such_scene.toml").string();
+  try {
+    load_scene(path);
+    FAIL();
+  } catch (const SceneError& e) {
+    EXPECT_NE(std::string(e.what()).find(path), std::string::npos);
+    EXPECT_NE(std::string(e.what()).find("No such file"), std::string::npos) << e.what();
+  }
+}
+
+TEST(Scene, DirectoryIsNotAScene) {
+  TempDir dir;
+  EXPECT_THROW(load_scene(dir.path().string()), SceneError);
+}
+
+// --- what a valid scene builds ----------------------------------------------------
+
+TEST(Scene, DefaultsApply) {
+  TempDir dir;
+  const auto scene = load_scene(dir.write("min.toml", kValid));
+  EXPECT_EQ(scene->name, "min");  // the file's stem without [scene] name
+  EXPECT_EQ(scene->dimension, 2);
+  EXPECT_EQ(scene->scheme, "em");
+  EXPECT_DOUBLE_EQ(scene->time.dt, 0.01);
+  EXPECT_DOUBLE_EQ(scene->time.t_end, 0.1);
+  EXPECT_EQ(scene->time.min_dt, 0.0);
+  EXPECT_DOUBLE_EQ(scene->newton.tolerance, 1e-10);
+  EXPECT_EQ(scene->newton.max_iterations, 20);
+  EXPECT_FALSE(scene->newton.line_search);
+  EXPECT_EQ(scene->output.every, 1);
+  EXPECT_FALSE(scene->tolerances.any());
+  EXPECT_EQ(scene->system->n_nodes(), 2);
+  EXPECT_EQ(scene->system->n_constraints(), 0);
+  EXPECT_TRUE(scene->system->potentials().empty());
+  EXPECT_TRUE(scene->warnings.empty());
+  EXPECT_TRUE(scene->system->initial_velocities().isZero());
+}
+
+TEST(Scene, EmptyListOfSpringsIsAllowed) {
+  TempDir dir;
+  const auto scene = load_scene(dir.write("e.toml", "springs = []\n" + kValid));
+  EXPECT_TRUE(scene->system->potentials().empty());
+}
+
+TEST(Scene, IntegersAreAcceptedAsNumbers) {
+  TempDir dir;
+  const auto scene =
+      load_scene(dir.write("ints.toml", "[time]\ndt = 1\nt_end = 10\n" + kParticles));
+  EXPECT_EQ(scene->time.dt, 1.0);
+  EXPECT_EQ(scene->time.t_end, 10.0);
+}
+
+TEST(Scene, RestLengthAndLinkLengthDefaultToInitialDistance) {
+  TempDir dir;
+  const auto scene = load_scene(dir.write(
+      "lengths.toml", kValid + "[[particles]]\nname = \"c\"\nmass = 2.0\nposition = [1.0, 2.0]\n"
+                               "[[springs]]\nbetween = [\"a\", \"c\"]\nstiffness = 3.0\n"
+                               "[[links]]\nbetween = [\"a\", \"b\"]\n"));
+  const System& s = *scene->system;
+  ASSERT_EQ(s.potentials().size(), 1u);
+  ASSERT_EQ(s.constraints().size(), 1u);
+  // At rest length and with the link satisfied, energy and residual vanish.
+  const Vec q = s.initial_positions();
+  EXPECT_NEAR(potential_energy(s, q, 0.0), 0.0, 1e-14);
+  EXPECT_NEAR(constraint_residual(s, q, 0.0), 0.0, 1e-14);
+}
+
+TEST(Scene, GravityLoadsOnlyFreeParticles) {
+  TempDir dir;
+  const auto scene = load_scene(
+      dir.write("g.toml", kTime + "[gravity]\nacceleration = [0.0, -9.81]\n" +
+                              "[[particles]]\nname = \"p\"\nposition = [0.0, 0.0]\nfixed = true\n" +
+                              "[[particles]]\nname = \"q\"\nmass = 2.0\nposition = [1.0, 0.0]\n"));
+  EXPECT_EQ(scene->system->potentials().size(), 1u);
+  EXPECT_EQ(scene->system->prescribed().size(), 2u);
+  EXPECT_FALSE(scene->system->symmetry().translation);
+}
+
+TEST(Scene, ZeroGravityKeepsSymmetry) {
+  TempDir dir;
+  const auto scene =
+      load_scene(dir.write("g0.toml", kValid + "[gravity]\nacceleration = [0.0, 0.0]\n"));
+  EXPECT_TRUE(scene->system->potentials().empty());
+  EXPECT_TRUE(scene->system->symmetry().translation);
+}
+
+TEST(Scene, InconsistentLinkVelocityWarns) {
+  TempDir dir;
+  const auto scene = load_scene(dir.write(
+      "warn.toml", kTime + "[[particles]]\nname = \"a\"\nmass = 1.0\nposition = [0.0, 0.0]\n" +
+                       "[[particles]]\nname = \"b\"\nmass = 1.0\nposition = [1.0, 0.0]\n" +
+                       "velocity = [1.0, 0.0]\n[[links]]\nbetween = [\"a\", \"b\"]\n"));
+  ASSERT_EQ(scene->warnings.size(), 1u);
+  EXPECT_NE(scene->warnings[0].find("warn.toml:"), std::string::npos);
+}
+
+TEST(Scene, TextWithSourceName) {
+  const auto scene = load_scene_text(kValid, "<built-in>");
+  EXPECT_EQ(scene->source_path, "<built-in>");
+  try {
+    load_scene_text("[time]\ndt = -1\nt_end = 1\n" + kParticles, "<built-in>");
+    FAIL();
+  } catch (const SceneError& e) {
+    EXPECT_NE(std::string(e.what()).find("<built-in>:2:"), std::string::npos) << e.what();
+  }
+}
+
+// --- overrides -------------------------------------------------------------------
+
+TEST(SceneOverrides, ReplaceAndAddValues) {
+  TempDir dir;
+  const std::string path = dir.write("o.toml", kValid);
+  const auto scene =
+      load_scene(path, {"time.dt=0.005", "scheme.name=midpoint", "particles[1].mass=3",
+                        "gravity.acceleration=[0, -1]", "output.every = 5"});
+  EXPECT_DOUBLE_EQ(scene->time.dt, 0.005);
+  EXPECT_EQ(scene->scheme, "midpoint");
+  EXPECT_DOUBLE_EQ(scene->system->lumped_mass()[2], 3.0);
+  EXPECT_EQ(scene->system->potentials().size(), 2u);
+  EXPECT_EQ(scene->output.every, 5);
+}
+
+TEST(SceneOverrides, AreValidatedAndNamed) {
+  TempDir dir;
+  const std::string path = dir.write("o.toml", kValid);
+  const auto message = [&](const std::string& assignment) {
+    try {
+      load_scene(path, {assignment});
+    } catch (const SceneError& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  std::string m = message("time.dt=-0.1");
+  EXPECT_NE(m.find("--set time.dt=-0.1: key 'time.dt': must be positive, received -0.1"),
+            std::string::npos)
+      << m;
+  m = message("time.dtt=0.1");
+  EXPECT_NE(m.find("did you mean 'dt'?"), std::string::npos) << m;
+  m = message("particles[7].mass=1");
+  EXPECT_NE(m.find("'particles' has 2 entries"), std::string::npos) << m;
+  m = message("particles.mass=1");
+  EXPECT_NE(m.find("particles[0].mass"), std::string::npos) << m;
+  m = message("no_equals_sign");
+  EXPECT_NE(m.find("expected key=value"), std::string::npos) << m;
+  m = message("time.dt=");
+  EXPECT_NE(m.find("missing value"), std::string::npos) << m;
+  m = message("time.dt=abc");
+  EXPECT_NE(m.find("received string \"abc\""), std::string::npos) << m;
+  try {
+    load_scene(path, std::vector<SceneOverride>{{"time.dt=0", "--dt 0"}});
+    FAIL();
+  } catch (const SceneError& e) {
+    EXPECT_EQ(std::string(e.what()).rfind("--dt 0: key 'time.dt'", 0), 0u) << e.what();
+  }
+}
+
+TEST(Scene, ClosestMatch) {
+  EXPECT_EQ(closest_match("dtt", {"dt", "t_end", "min_dt"}), "dt");
+  EXPECT_EQ(closest_match("lenght", {"length", "between"}), "length");
+  EXPECT_EQ(closest_match("DT", {"dt", "t_end"}), "dt");
+  EXPECT_EQ(closest_match("xyzzy", {"dt", "t_end"}), "");
+  EXPECT_EQ(closest_match("newton_tol", {"name", "newton_tolerance"}), "newton_tolerance");
+}
+
+// --- the example scenes ----------------------------------------------------------
+
+std::string example(const std::string& name) {
+  return std::string(EMDAE_EXAMPLES_DIR) + "/" + name + ".toml";
+}
+
+TEST(Examples, DoublePendulum) {
+  const auto scene = load_scene(example("double_pendulum"));
+  const System& s = *scene->system;
+  EXPECT_EQ(scene->name, "double_pendulum");
+  EXPECT_EQ(s.dim(), 2);
+  EXPECT_EQ(s.n_nodes(), 2);
+  EXPECT_EQ(s.n_dofs(), 4);
+  EXPECT_EQ(s.n_constraints(), 2);       // anchor + link
+  EXPECT_EQ(s.potentials().size(), 2u);  // gravity on both
+  EXPECT_TRUE(s.prescribed().empty());
+  EXPECT_FALSE(s.symmetry().translation);
+  EXPECT_EQ(scene->scheme, "em");
+  EXPECT_TRUE(scene->warnings.empty());
+}
+
+TEST(Examples, ElasticPendulum) {
+  const auto scene = load_scene(example("elastic_pendulum"));
+  const System& s = *scene->system;
+  EXPECT_EQ(s.dim(), 2);
+  EXPECT_EQ(s.n_nodes(), 2);
+  EXPECT_EQ(s.prescribed().size(), 2u);  // the pivot
+  EXPECT_EQ(s.n_constraints(), 0);
+  EXPECT_EQ(s.potentials().size(), 2u);                        // spring + gravity on the bob
+  EXPECT_FALSE(s.potentials()[0]->quadratic_in_invariants());  // the "linear" law
+}
+
+TEST(Examples, FourParticle) {
+  const auto scene = load_scene(example("four_particle"));
+  const System& s = *scene->system;
+  EXPECT_EQ(s.dim(), 3);
+  EXPECT_EQ(s.n_nodes(), 4);
+  EXPECT_EQ(s.n_dofs(), 12);
+  EXPECT_EQ(s.n_constraints(), 2);
+  EXPECT_EQ(s.potentials().size(), 4u);
+  EXPECT_TRUE(s.symmetry().translation);
+  EXPECT_TRUE(s.symmetry().rotation);
+  EXPECT_TRUE(scene->warnings.empty());  // rigid-motion velocities keep the links
+  // Spinning and drifting: both momenta non-zero.
+  const State st = initial_state(s);
+  const Quantities q = measure(s, st.q, st.v, 0.0);
+  EXPECT_GT(q.linear_momentum.norm(), 0.1);
+  EXPECT_GT(q.angular_momentum.norm(), 0.1);
+  EXPECT_TRUE(scene->tolerances.any());
+}
+
+TEST(Examples, StiffPendulum) {
+  const auto scene = load_scene(example("stiff_pendulum"));
+  const System& s = *scene->system;
+  EXPECT_EQ(s.n_nodes(), 2);
+  EXPECT_EQ(s.potentials().size(), 2u);
+  // k L / (m g) = 1e6 and dt far beyond the spring's period 2 pi sqrt(m/k).
+  const double k = 9.81e6, m = 1.0;
+  const double pi = 3.141592653589793;
+  EXPECT_GT(scene->time.dt, 10 * 2 * pi * std::sqrt(m / k));
+  // The spring's energy at a small radial stretch delta is k/2 delta^2.
+  const Term& spring = *s.potentials()[0];
+  ASSERT_EQ(spring.n_local(), 4);
+  Vec local(4);
+  const Vec q0 = s.initial_positions();
+  for (int i = 0; i < 4; ++i) local[i] = q0[spring.dofs()[static_cast<std::size_t>(i)]];
+  const double delta = 1e-4;
+  const Eigen::Vector2d r = (local.tail<2>() - local.head<2>()).normalized();
+  local.tail<2>() += delta * r;
+  EXPECT_NEAR(spring.value(local, 0.0), 0.5 * k * delta * delta, 1e-6 * k * delta * delta);
+}
+
+}  // namespace
+}  // namespace emdae

@@ -1,0 +1,66 @@
+#include "verify/history.hpp"
+
+#include <cerrno>
+#include <cstring>
+#include <stdexcept>
+
+namespace emdae {
+
+std::vector<std::string> history_columns(int dim, bool external_work) {
+  std::vector<std::string> c = {"t", "dt", "kinetic", "potential", "total_energy"};
+  if (external_work) c.push_back("external_work");
+  if (dim == 2) {
+    c.insert(c.end(), {"Lx", "Ly", "J"});
+  } else {
+    c.insert(c.end(), {"Lx", "Ly", "Lz", "J", "Jx", "Jy", "Jz"});
+  }
+  c.insert(c.end(), {"phi_max", "newton_iterations", "cutbacks"});
+  return c;
+}
+
+HistoryWriter::HistoryWriter(const std::string& path, int dim, bool external_work)
+    : path_(path), dim_(dim), external_work_(external_work) {
+  file_ = std::fopen(path.c_str(), "w");
+  if (!file_)
+    throw std::runtime_error("cannot write history '" + path + "': " + std::strerror(errno));
+  const auto columns = history_columns(dim, external_work);
+  for (std::size_t i = 0; i < columns.size(); ++i)
+    std::fprintf(file_, "%s%s", i ? "," : "", columns[i].c_str());
+  std::fputc('\n', file_);
+  std::fflush(file_);
+}
+
+HistoryWriter::~HistoryWriter() {
+  if (file_) std::fclose(file_);
+}
+
+void HistoryWriter::write(const Sample& s) {
+  if (!file_) throw std::logic_error("HistoryWriter::write after close");
+  const Quantities& q = s.quantities;
+  std::fprintf(file_, "%.17g,%.17g,%.17g,%.17g,%.17g", s.t, s.dt, q.kinetic, q.potential,
+               q.total());
+  if (external_work_) std::fprintf(file_, ",%.17g", s.external_work);
+  for (int d = 0; d < q.linear_momentum.size(); ++d)
+    std::fprintf(file_, ",%.17g", q.linear_momentum[d]);
+  if (dim_ == 2) {
+    std::fprintf(file_, ",%.17g", q.angular_momentum[0]);
+  } else {
+    std::fprintf(file_, ",%.17g", q.angular_momentum.norm());
+    for (int d = 0; d < 3; ++d) std::fprintf(file_, ",%.17g", q.angular_momentum[d]);
+  }
+  std::fprintf(file_, ",%.17g,%d,%d\n", q.phi_max, s.newton_iterations, s.cutbacks);
+  // Flushed per row: a killed run keeps its history up to the last step.
+  if (std::fflush(file_) != 0)
+    throw std::runtime_error("cannot write history '" + path_ + "': " + std::strerror(errno));
+  ++rows_;
+}
+
+void HistoryWriter::close() {
+  if (!file_) return;
+  const int rc = std::fclose(file_);
+  file_ = nullptr;
+  if (rc != 0)
+    throw std::runtime_error("cannot close history '" + path_ + "': " + std::strerror(errno));
+}
+
+}  // namespace emdae

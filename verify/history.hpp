@@ -1,0 +1,50 @@
+// The history table of a run, history.csv: one row per recorded sample,
+// written as the run goes and flushed after every row, so that a run that is
+// killed or crashes keeps everything up to its last accepted step.
+//
+// Columns (full precision, %.17g):
+//   2D: t,dt,kinetic,potential,total_energy,Lx,Ly,J,phi_max,newton_iterations,cutbacks
+//   3D: t,dt,kinetic,potential,total_energy,Lx,Ly,Lz,J,Jx,Jy,Jz,phi_max,
+//       newton_iterations,cutbacks
+// In 2D J is the (signed) out-of-plane angular momentum; in 3D J = |J| and
+// Jx, Jy, Jz its components. With an external-work hook a column
+// external_work follows total_energy.
+#pragma once
+
+#include <cstdio>
+#include <string>
+#include <vector>
+
+#include "verify/recorder.hpp"
+
+namespace emdae {
+
+/// The header of history.csv for a system of dimension `dim`.
+std::vector<std::string> history_columns(int dim, bool external_work = false);
+
+class HistoryWriter {
+ public:
+  /// Creates (truncates) `path` and writes the header; throws
+  /// std::runtime_error naming the path and the reason when it cannot.
+  HistoryWriter(const std::string& path, int dim, bool external_work = false);
+  ~HistoryWriter();
+  HistoryWriter(const HistoryWriter&) = delete;
+  HistoryWriter& operator=(const HistoryWriter&) = delete;
+
+  /// Appends one row and flushes it to the operating system.
+  void write(const Sample& sample);
+  /// Closes the file; throws if buffered data could not be written.
+  void close();
+
+  const std::string& path() const { return path_; }
+  long rows() const { return rows_; }
+
+ private:
+  std::string path_;
+  int dim_;
+  bool external_work_;
+  std::FILE* file_ = nullptr;
+  long rows_ = 0;
+};
+
+}  // namespace emdae

@@ -1,0 +1,135 @@
+#include "verify/summary.hpp"
+
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstdio>
+#include <cstring>
+#include <fstream>
+#include <stdexcept>
+
+namespace emdae {
+
+namespace {
+
+Check make_check(const std::string& name, std::optional<double> value, double limit) {
+  Check c{name, value, limit, "skipped"};
+  // A NaN error must fail, hence the negated comparison.
+  if (value) c.result = !(*value <= limit) ? "fail" : "pass";
+  return c;
+}
+
+nlohmann::ordered_json optional_number(const std::optional<double>& x) {
+  return x ? nlohmann::ordered_json(*x) : nlohmann::ordered_json(nullptr);
+}
+
+}  // namespace
+
+bool Summary::checks_pass() const {
+  for (const auto& c : checks)
+    if (c.result == "fail") return false;
+  return true;
+}
+
+Summary summarize(const RunInfo& info, const System& system, const Recorder& recorder,
+                  const Tolerances& tolerances) {
+  Summary s;
+  s.scene = info.scene;
+  s.scheme = info.scheme;
+  s.source = info.source;
+  s.dimension = system.dim();
+  s.dt = info.dt;
+  s.t_end = info.t_end;
+  s.t_reached = recorder.last().t;
+  s.steps = recorder.steps();
+  s.newton_iterations = recorder.newton_iterations();
+  s.newton_iterations_max_per_step = recorder.newton_iterations_max_per_step();
+  s.cutbacks = recorder.cutbacks();
+  s.cpu_seconds = info.cpu_seconds;
+  s.energy_initial = recorder.initial().quantities.total();
+  s.energy_rel_error_max = recorder.energy_rel_error_max();
+  s.energy_error_relative = recorder.energy_error_is_relative();
+  s.linear_momentum_error_max = recorder.linear_momentum_error_max();
+  s.linear_momentum_note = recorder.conservation().linear_reason;
+  s.angular_momentum_rel_error_max = recorder.angular_momentum_rel_error_max();
+  s.angular_momentum_note = recorder.conservation().angular_reason;
+  if (s.angular_momentum_rel_error_max && !recorder.angular_momentum_error_is_relative())
+    s.angular_momentum_note = "absolute error: initial angular momentum is zero";
+  s.constraint_residual_max = recorder.constraint_residual_max();
+  s.status = info.status;
+  s.dofs = system.n_dofs();
+  s.free_dofs = system.n_dofs() - static_cast<int>(system.prescribed().size());
+  s.constraints = system.n_constraints();
+  if (tolerances.energy_rel)
+    s.checks.push_back(make_check("energy_rel", s.energy_rel_error_max, *tolerances.energy_rel));
+  if (tolerances.linear_momentum)
+    s.checks.push_back(
+        make_check("linear_momentum", s.linear_momentum_error_max, *tolerances.linear_momentum));
+  if (tolerances.angular_momentum_rel)
+    s.checks.push_back(make_check("angular_momentum_rel", s.angular_momentum_rel_error_max,
+                                  *tolerances.angular_momentum_rel));
+  if (tolerances.constraint)
+    s.checks.push_back(make_check("constraint", s.constraint_residual_max, *tolerances.constraint));
+  return s;
+}
+
+nlohmann::ordered_json to_json(const Summary& s) {
+  nlohmann::ordered_json j;
+  j["scene"] = s.scene;
+  j["scheme"] = s.scheme;
+  j["source"] = s.source;
+  j["dimension"] = s.dimension;
+  j["dt"] = s.dt;
+  j["t_end"] = s.t_end;
+  j["t_reached"] = s.t_reached;
+  j["steps"] = s.steps;
+  j["newton_iterations"] = s.newton_iterations;
+  j["newton_iterations_max_per_step"] = s.newton_iterations_max_per_step;
+  j["cutbacks"] = s.cutbacks;
+  j["cpu_seconds"] = s.cpu_seconds;
+  j["energy_initial"] = s.energy_initial;
+  j["energy_rel_error_max"] = s.energy_rel_error_max;
+  if (!s.energy_error_relative) j["energy_note"] = "absolute error: initial energy scale is zero";
+  j["linear_momentum_error_max"] = optional_number(s.linear_momentum_error_max);
+  if (!s.linear_momentum_note.empty()) j["linear_momentum_note"] = s.linear_momentum_note;
+  j["angular_momentum_rel_error_max"] = optional_number(s.angular_momentum_rel_error_max);
+  if (!s.angular_momentum_note.empty()) j["angular_momentum_note"] = s.angular_momentum_note;
+  j["constraint_residual_max"] = s.constraint_residual_max;
+  j["status"] = s.status;
+  j["dofs"] = s.dofs;
+  j["free_dofs"] = s.free_dofs;
+  j["constraints"] = s.constraints;
+  if (!s.checks.empty()) {
+    nlohmann::ordered_json checks = nlohmann::ordered_json::object();
+    for (const auto& c : s.checks)
+      checks[c.name] = {
+          {"value", optional_number(c.value)}, {"limit", c.limit}, {"result", c.result}};
+    j["checks"] = checks;
+    j["checks_pass"] = s.checks_pass();
+  }
+  j["emdae_version"] = EMDAE_VERSION;
+  return j;
+}
+
+void write_summary(const std::string& path, const Summary& summary) {
+  // Same folder as the target, so that rename() is atomic (one file system).
+  const std::string tmp = path + ".tmp." + std::to_string(::getpid());
+  {
+    std::ofstream out(tmp, std::ios::trunc);
+    if (!out)
+      throw std::runtime_error("cannot write summary '" + tmp + "': " + std::strerror(errno));
+    out << to_json(summary).dump(2) << '\n';
+    out.flush();
+    if (!out) {
+      std::remove(tmp.c_str());
+      throw std::runtime_error("cannot write summary '" + tmp + "'");
+    }
+  }
+  if (std::rename(tmp.c_str(), path.c_str()) != 0) {
+    const std::string why = std::strerror(errno);
+    std::remove(tmp.c_str());
+    throw std::runtime_error("cannot move summary into place '" + path + "': " + why);
+  }
+}
+
+}  // namespace emdae

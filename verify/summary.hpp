@@ -1,0 +1,79 @@
+// The summary of a run, summary.json: what was run, what it cost, how well
+// it conserved what it should, and whether it finished.
+//
+// Written atomically (a temporary file in the same folder, then rename), so a
+// reader never sees half a summary and a crash never leaves a truncated one.
+// Momentum errors the system does not conserve are null, with the reason in
+// "<name>_note". Optional pass/fail thresholds (a scene's [tolerances]) are
+// reported under "checks".
+#pragma once
+
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "verify/recorder.hpp"
+
+namespace emdae {
+
+/// Optional thresholds on the figures of a run.
+struct Tolerances {
+  std::optional<double> energy_rel;
+  std::optional<double> linear_momentum;
+  std::optional<double> angular_momentum_rel;
+  std::optional<double> constraint;
+  bool any() const { return energy_rel || linear_momentum || angular_momentum_rel || constraint; }
+};
+
+struct Check {
+  std::string name;             // "energy_rel", ...
+  std::optional<double> value;  // empty: not applicable (quantity not conserved)
+  double limit = 0.0;
+  std::string result;  // "pass", "fail" or "skipped"
+};
+
+struct Summary {
+  std::string scene, scheme, source;
+  int dimension = 2;
+  double dt = 0.0, t_end = 0.0, t_reached = 0.0;
+  long steps = 0;
+  long newton_iterations = 0;
+  int newton_iterations_max_per_step = 0;
+  long cutbacks = 0;
+  double cpu_seconds = 0.0;
+  double energy_initial = 0.0;
+  double energy_rel_error_max = 0.0;
+  bool energy_error_relative = true;
+  std::optional<double> linear_momentum_error_max;
+  std::string linear_momentum_note;
+  std::optional<double> angular_momentum_rel_error_max;
+  std::string angular_momentum_note;
+  double constraint_residual_max = 0.0;
+  std::string status;  // "ok" or what failed
+  int dofs = 0, free_dofs = 0, constraints = 0;
+  std::vector<Check> checks;
+
+  bool ok() const { return status == "ok"; }
+  bool checks_pass() const;
+};
+
+/// What the recorder alone cannot know about a run.
+struct RunInfo {
+  std::string scene, scheme, source;
+  double dt = 0.0, t_end = 0.0;
+  double cpu_seconds = 0.0;
+  std::string status = "ok";
+};
+
+Summary summarize(const RunInfo& info, const System& system, const Recorder& recorder,
+                  const Tolerances& tolerances = {});
+
+/// The summary as JSON, keys in a reading order (what ran, what it cost,
+/// how well it conserved, whether it finished).
+nlohmann::ordered_json to_json(const Summary& summary);
+
+/// Writes `summary` to `path` atomically; throws std::runtime_error on failure.
+void write_summary(const std::string& path, const Summary& summary);
+
+}  // namespace emdae
