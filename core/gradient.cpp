@@ -53,8 +53,8 @@ void discrete_gradient(const Term& term, const Vec& q0, const Vec& q1, double t0
   const bool quadratic = term.quadratic_in_invariants();
   ws.g_tilde.resize(n_inv);
   if (jac) ws.block_jac.setZero(n_inv, n_inv);
-  Vec g1(m), gm(m);
-  Mat hm(m, m);
+  Vec g1(m), gm(m), pi_q(m);
+  Mat hm(m, m), h_plus(m, m), h_minus(m, m);
   for (int b = 0; b < term.n_blocks(); ++b) {
     const auto pim = ws.pim.segment(b * m, m);
     const auto dpi = ws.dpi.segment(b * m, m);
@@ -67,9 +67,33 @@ void discrete_gradient(const Term& term, const Vec& q0, const Vec& q1, double t0
     const double scale =
         std::max(ws.pi0.segment(b * m, m).norm(), ws.pi1.segment(b * m, m).norm());
     if (d2 <= std::pow(kDiscreteGradientThreshold * scale, 2) || d2 == 0.0) continue;
-    const double f0 = term.block_value(b, ws.pi0.segment(b * m, m), tm);
-    const double f1 = term.block_value(b, ws.pi1.segment(b * m, m), tm);
-    const double c = (f1 - f0 - gm.dot(dpi)) / d2;
+    double c = 0.0;
+    if (d2 > std::pow(kDiscreteGradientQuadratureThreshold * scale, 2)) {
+      const double f0 = term.block_value(b, ws.pi0.segment(b * m, m), tm);
+      const double f1 = term.block_value(b, ws.pi1.segment(b * m, m), tm);
+      c = (f1 - f0 - gm.dot(dpi)) / d2;
+    } else {
+      // The quotient above loses eps |f~| / |dpi|^2 to cancellation, a force
+      // error of eps |f~| / |dpi| that stalls Newton at tight tolerances
+      // (1e-11) once |dpi| ~ 1e-4 |pi|. Here the same numerator, with
+      // h(r) = dpi^T [H(pi_mid + r dpi) - H(pi_mid - r dpi)] dpi, is
+      //   f~(pi_1) - f~(pi_0) - grad f~(pi_mid).dpi = int_0^{1/2} (1/2 - r) h(r) dr,
+      // whose round-off is only eps |H| |dpi|^2; the error of 3-point
+      // Gauss-Legendre is O(|dpi|^7), far below round-off in this range.
+      static const double kX[3] = {-std::sqrt(0.6), 0.0, std::sqrt(0.6)};
+      static const double kW[3] = {5.0 / 9.0, 8.0 / 9.0, 5.0 / 9.0};
+      double numerator = 0.0;
+      for (int k = 0; k < 3; ++k) {
+        const double r = 0.25 * (1.0 + kX[k]);  // Gauss points mapped to [0, 1/2]
+        pi_q = pim + r * dpi;
+        term.block_hessian(b, pi_q, tm, h_plus);
+        pi_q = pim - r * dpi;
+        term.block_hessian(b, pi_q, tm, h_minus);
+        h_plus -= h_minus;
+        numerator += 0.25 * kW[k] * (0.5 - r) * dpi.dot(h_plus.lazyProduct(dpi));
+      }
+      c = numerator / d2;
+    }
     ws.g_tilde.segment(b * m, m) += c * dpi;
     if (jac) {
       term.block_gradient(b, ws.pi1.segment(b * m, m), tm, g1);

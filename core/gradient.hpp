@@ -20,7 +20,10 @@
 // quadratically. When |dpi| is below kDiscreteGradientThreshold relative to
 // |pi| the correction is dropped: c is then O(|dpi|) and its contribution to
 // the energy O(|dpi|^3), far below round-off, while the quotient itself would
-// be dominated by cancellation.
+// be dominated by cancellation. Between that and
+// kDiscreteGradientQuadratureThreshold the numerator of c is evaluated as an
+// integral of Hessian differences instead of f~(pi_1) - f~(pi_0) - ..., which
+// keeps the force free of the cancellation error eps |f~| / |dpi|.
 #pragma once
 
 #include "core/term.hpp"
@@ -30,6 +33,7 @@ namespace emdae {
 enum class GradientKind { Exact, Midpoint, Discrete };
 
 inline constexpr double kDiscreteGradientThreshold = 1e-7;
+inline constexpr double kDiscreteGradientQuadratureThreshold = 1e-2;
 
 /// Scratch space reused across terms to avoid allocation in the hot loop.
 struct TermWorkspace {

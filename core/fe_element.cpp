@@ -1,0 +1,230 @@
+#include "core/fe_element.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+#include <stdexcept>
+
+namespace emdae {
+
+namespace {
+
+// Corners of the parent square [-1, 1]^2, counter-clockwise.
+constexpr double kCornerXi[4] = {-1.0, 1.0, 1.0, -1.0};
+constexpr double kCornerEta[4] = {-1.0, -1.0, 1.0, 1.0};
+// 2x2 Gauss-Legendre: points +-1/sqrt(3), weights 1.
+const double kGauss = 1.0 / std::sqrt(3.0);
+
+struct ParentPoint {
+  double xi, eta, weight;
+};
+
+ParentPoint gauss_point(int gp) {
+  return {kCornerXi[gp] * kGauss, kCornerEta[gp] * kGauss, 1.0};
+}
+
+// Shape functions N_A = 1/4 (1 + xi_A xi)(1 + eta_A eta) and their parent
+// derivatives (row A: dN_A/dxi, dN_A/deta).
+Eigen::Vector4d shape(double xi, double eta) {
+  Eigen::Vector4d n;
+  for (int a = 0; a < 4; ++a) n[a] = 0.25 * (1.0 + kCornerXi[a] * xi) * (1.0 + kCornerEta[a] * eta);
+  return n;
+}
+
+Eigen::Matrix<double, 4, 2> shape_parent_gradient(double xi, double eta) {
+  Eigen::Matrix<double, 4, 2> d;
+  for (int a = 0; a < 4; ++a) {
+    d(a, 0) = 0.25 * kCornerXi[a] * (1.0 + kCornerEta[a] * eta);
+    d(a, 1) = 0.25 * kCornerEta[a] * (1.0 + kCornerXi[a] * xi);
+  }
+  return d;
+}
+
+// Reference Jacobian J0 = dX/dxi (columns: d/dxi, d/deta).
+Eigen::Matrix2d reference_jacobian(const QuadNodes& x, double xi, double eta) {
+  const Eigen::Matrix<double, 4, 2> d = shape_parent_gradient(xi, eta);
+  Eigen::Matrix2d j = Eigen::Matrix2d::Zero();
+  for (int a = 0; a < 4; ++a) j += x[static_cast<std::size_t>(a)] * d.row(a);
+  return j;
+}
+
+// Throws when the reference map is inverted or degenerate. det J0 of a Q1 is
+// linear in (xi, eta), so positivity at the four corners means positivity
+// everywhere; a relative threshold catches collinear nodes whose determinant
+// is zero up to round-off.
+void check_geometry(const QuadNodes& x, const std::string& what) {
+  double h2 = 0.0;
+  for (int a = 0; a < 4; ++a)
+    h2 = std::max(
+        h2,
+        (x[static_cast<std::size_t>((a + 1) % 4)] - x[static_cast<std::size_t>(a)]).squaredNorm());
+  for (int a = 0; a < 4; ++a) {
+    const double det = reference_jacobian(x, kCornerXi[a], kCornerEta[a]).determinant();
+    if (!(det > 1e-12 * h2)) {
+      std::ostringstream s;
+      s << what << " is inverted or degenerate: reference Jacobian det J0 = " << det
+        << " at its corner " << a + 1 << " (nodes must be distinct and counter-clockwise; "
+        << "coordinates";
+      for (const auto& p : x) s << " (" << p.x() << ", " << p.y() << ")";
+      s << ")";
+      throw std::invalid_argument(s.str());
+    }
+  }
+}
+
+}  // namespace
+
+Q1Element::Q1Element(std::vector<int> dofs, const QuadNodes& x, const Material& material, int index,
+                     std::shared_ptr<const std::string> body)
+    : Term(std::move(dofs), 3 * kGaussPoints, 3),
+      material_(material),
+      index_(index),
+      body_(std::move(body)) {
+  if (n_local() != 8) {
+    throw std::invalid_argument(describe() + ": needs 8 dofs (4 nodes x 2), received " +
+                                std::to_string(n_local()));
+  }
+  check_geometry(x, describe());
+  for (int g = 0; g < kGaussPoints; ++g) {
+    const ParentPoint p = gauss_point(g);
+    const Eigen::Matrix2d j = reference_jacobian(x, p.xi, p.eta);
+    // grad_X N_A = J0^{-T} grad_xi N_A, as rows: dN = dN_parent J0^{-1}.
+    gp_[static_cast<std::size_t>(g)].dn = shape_parent_gradient(p.xi, p.eta) * j.inverse();
+    gp_[static_cast<std::size_t>(g)].weight = p.weight * j.determinant();
+  }
+}
+
+std::string Q1Element::describe() const {
+  std::ostringstream s;
+  s << "Q1 element " << index_;
+  if (body_) s << " of body '" << *body_ << "'";
+  if (n_local() == 8) {
+    s << " (nodes";
+    for (int a = 0; a < 4; ++a) s << " " << dofs()[static_cast<std::size_t>(2 * a)] / 2;
+    s << ")";
+  }
+  return s.str();
+}
+
+Eigen::Matrix2d Q1Element::deformation_gradient(const Vec& q, int gp) const {
+  const auto& dn = gp_[static_cast<std::size_t>(gp)].dn;
+  Eigen::Matrix2d f = Eigen::Matrix2d::Zero();
+  for (int a = 0; a < 4; ++a) f += q.segment<2>(2 * a) * dn.row(a);
+  return f;
+}
+
+void Q1Element::invariants(const Vec& q, Vec& pi) const {
+  pi.resize(n_invariants());
+  for (int g = 0; g < kGaussPoints; ++g) {
+    const Eigen::Matrix2d f = deformation_gradient(q, g);
+    pi[3 * g + 0] = f.col(0).squaredNorm();
+    pi[3 * g + 1] = f.col(1).squaredNorm();
+    pi[3 * g + 2] = f.col(0).dot(f.col(1));
+  }
+}
+
+// dC_IJ/dq_Ai = dN_AI F_iJ + F_iI dN_AJ.
+void Q1Element::invariant_jacobian(const Vec& q, Mat& dpi) const {
+  dpi.resize(n_invariants(), n_local());
+  for (int g = 0; g < kGaussPoints; ++g) {
+    const auto& dn = gp_[static_cast<std::size_t>(g)].dn;
+    const Eigen::Matrix2d f = deformation_gradient(q, g);
+    for (int a = 0; a < 4; ++a)
+      for (int i = 0; i < 2; ++i) {
+        dpi(3 * g + 0, 2 * a + i) = 2.0 * f(i, 0) * dn(a, 0);
+        dpi(3 * g + 1, 2 * a + i) = 2.0 * f(i, 1) * dn(a, 1);
+        dpi(3 * g + 2, 2 * a + i) = dn(a, 0) * f(i, 1) + f(i, 0) * dn(a, 1);
+      }
+  }
+}
+
+// d2C_IJ/dq_Ai dq_Bj = delta_ij (dN_AI dN_BJ + dN_AJ dN_BI), so
+// sum_k w_k A_k = G (x) I_2 with G_AB = 2 dN_A^T Sw dN_B per Gauss point,
+// Sw = [w1, w3/2; w3/2, w2] (the factor 1/2 because C12 stands for C12 and C21).
+void Q1Element::add_invariant_hessians(const Vec& w, Mat& k) const {
+  for (int g = 0; g < kGaussPoints; ++g) {
+    const auto& dn = gp_[static_cast<std::size_t>(g)].dn;
+    Eigen::Matrix2d sw;
+    sw << w[3 * g], 0.5 * w[3 * g + 2], 0.5 * w[3 * g + 2], w[3 * g + 1];
+    const Eigen::Matrix4d gab = 2.0 * dn * sw * dn.transpose();
+    for (int a = 0; a < 4; ++a)
+      for (int b = 0; b < 4; ++b) {
+        k(2 * a, 2 * b) += gab(a, b);
+        k(2 * a + 1, 2 * b + 1) += gab(a, b);
+      }
+  }
+}
+
+double Q1Element::block_value(int block, const VecRef& pi, double) const {
+  return gp_[static_cast<std::size_t>(block)].weight * material_.energy(pi.head<3>());
+}
+
+void Q1Element::block_gradient(int block, const VecRef& pi, double, Eigen::Ref<Vec> g) const {
+  g = gp_[static_cast<std::size_t>(block)].weight * material_.energy_gradient(pi.head<3>());
+}
+
+void Q1Element::block_hessian(int block, const VecRef& pi, double, Eigen::Ref<Mat> h) const {
+  h = gp_[static_cast<std::size_t>(block)].weight * material_.energy_hessian(pi.head<3>());
+}
+
+double Q1Element::area() const {
+  double a = 0.0;
+  for (const auto& g : gp_) a += g.weight;
+  return a;
+}
+
+Eigen::Matrix2d Q1Element::second_piola_kirchhoff(const Vec& q, int gp) const {
+  const Eigen::Matrix2d f = deformation_gradient(q, gp);
+  const Eigen::Matrix2d c = f.transpose() * f;
+  return material_.second_piola_kirchhoff(Eigen::Vector3d(c(0, 0), c(1, 1), c(0, 1)));
+}
+
+Eigen::Matrix4d q1_mass_matrix(const QuadNodes& x, double density) {
+  Eigen::Matrix4d m = Eigen::Matrix4d::Zero();
+  for (int g = 0; g < 4; ++g) {
+    const ParentPoint p = gauss_point(g);
+    const Eigen::Vector4d n = shape(p.xi, p.eta);
+    m +=
+        (density * p.weight * reference_jacobian(x, p.xi, p.eta).determinant()) * n * n.transpose();
+  }
+  return m;
+}
+
+double q1_area(const QuadNodes& x) {
+  double a = 0.0;
+  for (int g = 0; g < 4; ++g) {
+    const ParentPoint p = gauss_point(g);
+    a += p.weight * reference_jacobian(x, p.xi, p.eta).determinant();
+  }
+  return a;
+}
+
+Eigen::Vector2d q1_first_moment(const QuadNodes& x) {
+  Eigen::Vector2d s = Eigen::Vector2d::Zero();
+  for (int g = 0; g < 4; ++g) {
+    const ParentPoint p = gauss_point(g);
+    const Eigen::Vector4d n = shape(p.xi, p.eta);
+    Eigen::Vector2d xg = Eigen::Vector2d::Zero();
+    for (int a = 0; a < 4; ++a) xg += n[a] * x[static_cast<std::size_t>(a)];
+    s += p.weight * reference_jacobian(x, p.xi, p.eta).determinant() * xg;
+  }
+  return s;
+}
+
+void add_q1_mass(System& system, const std::array<int, 4>& nodes, const QuadNodes& x,
+                 double density, bool lumped) {
+  const Eigen::Matrix4d m = q1_mass_matrix(x, density);
+  for (int a = 0; a < 4; ++a) {
+    const int na = nodes[static_cast<std::size_t>(a)];
+    if (lumped) {
+      system.add_mass(na, na, m.row(a).sum());
+      continue;
+    }
+    system.add_mass(na, na, m(a, a));
+    // add_mass mirrors off-diagonal entries: add each pair once.
+    for (int b = a + 1; b < 4; ++b)
+      system.add_mass(na, nodes[static_cast<std::size_t>(b)], m(a, b));
+  }
+}
+
+}  // namespace emdae

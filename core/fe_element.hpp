@@ -1,0 +1,93 @@
+// The 4-node isoparametric plane-strain element (Q1) as a Term.
+//
+// Local dofs are the 4 nodes x 2 components, node-major: q = (q_1x, q_1y,
+// q_2x, ..., q_4y), nodes counter-clockwise in the reference configuration.
+// With the reference shape-function gradients dN_A = grad_X N_A stored at the
+// 2x2 Gauss points, paper eqs. (4)-(5) give at every Gauss point
+//
+//   F = sum_A q_A (x) dN_A,     C = F^T F = sum_AB (q_A . q_B) dN_A (x) dN_B,
+//
+// so the invariants pi = (C11, C22, C12) of each Gauss point are quadratic in
+// q and depend on q only through the dot products q_A . q_B: translation- and
+// rotation-invariant (paper eq. (48)). One block of 3 invariants per Gauss
+// point, f~_b = W(C_b) w_b J0_b (unit thickness), so the strain energy is
+// paper eq. (7) integrated by 2x2 Gauss. Dpi and sum_k w_k A_k are formed
+// from dN directly: no dense A_k is stored (meshes go up to 10^6 dofs).
+#pragma once
+
+#include <Eigen/Dense>
+#include <array>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "core/material.hpp"
+#include "core/system.hpp"
+#include "core/term.hpp"
+
+namespace emdae {
+
+/// Reference nodal coordinates of one Q1 element, counter-clockwise.
+using QuadNodes = std::array<Eigen::Vector2d, 4>;
+
+class Q1Element final : public Term {
+ public:
+  static constexpr int kGaussPoints = 4;
+
+  /// @param dofs   the 8 global dofs (node-major, x before y).
+  /// @param x      reference nodal coordinates, counter-clockwise.
+  /// @param index  element number within its body, for messages.
+  /// @param body   body name, for messages (may be null).
+  /// Throws std::invalid_argument naming the element if the reference map is
+  /// inverted or degenerate (det J0 <= 0 at a corner or Gauss point).
+  Q1Element(std::vector<int> dofs, const QuadNodes& x, const Material& material, int index = 0,
+            std::shared_ptr<const std::string> body = nullptr);
+
+  void invariants(const Vec& q, Vec& pi) const override;
+  void invariant_jacobian(const Vec& q, Mat& dpi) const override;
+  void add_invariant_hessians(const Vec& w, Mat& k) const override;
+
+  double block_value(int block, const VecRef& pi, double t) const override;
+  void block_gradient(int block, const VecRef& pi, double t, Eigen::Ref<Vec> g) const override;
+  void block_hessian(int block, const VecRef& pi, double t, Eigen::Ref<Mat> h) const override;
+
+  bool quadratic_in_invariants() const override { return material_.quadratic_in_invariants(); }
+  std::string describe() const override;
+
+  const Material& material() const { return material_; }
+  /// Reference area, sum of w J0 over the Gauss points.
+  double area() const;
+  /// F at Gauss point gp for the local positions q.
+  Eigen::Matrix2d deformation_gradient(const Vec& q, int gp) const;
+  /// Second Piola-Kirchhoff stress S = 2 DW(C) at Gauss point gp.
+  Eigen::Matrix2d second_piola_kirchhoff(const Vec& q, int gp) const;
+
+ private:
+  struct GaussPoint {
+    Eigen::Matrix<double, 4, 2> dn;  // row A: grad_X N_A
+    double weight = 0.0;             // w_gp J0_gp
+  };
+  std::array<GaussPoint, kGaussPoints> gp_;
+  Material material_;
+  int index_;
+  std::shared_ptr<const std::string> body_;
+};
+
+/// Consistent element mass matrix M_AB = int rho N_A N_B dV (paper eq. (13)),
+/// by 2x2 Gauss, which is exact for Q1 (N_A N_B J0 is cubic per direction).
+Eigen::Matrix4d q1_mass_matrix(const QuadNodes& x, double density);
+
+/// Adds the element's mass to the node mass matrix of `system` (global node
+/// numbers `nodes`): the consistent matrix, or with `lumped` its row sums on
+/// the diagonal (m_A = int rho N_A dV: same total mass and, since the element
+/// is isoparametric, same first moment, so the centre of mass is unchanged).
+void add_q1_mass(System& system, const std::array<int, 4>& nodes, const QuadNodes& x,
+                 double density, bool lumped);
+
+/// Reference area of the element, by 2x2 Gauss (exact).
+double q1_area(const QuadNodes& x);
+
+/// Reference centroid of the element times its area, int X dV (exact).
+Eigen::Vector2d q1_first_moment(const QuadNodes& x);
+
+}  // namespace emdae

@@ -1,0 +1,70 @@
+// Hyperelastic materials in plane strain, written in the invariants of C.
+//
+// A Q1 element's strain energy (paper eq. (7)) is integrated at Gauss points,
+// and at each point the energy density W depends on the right Cauchy-Green
+// tensor C = F^T F (paper eq. (5)) only. In plane strain C33 = 1 and the 2x2
+// block of C has three independent components, which are the element's
+// quadratic invariants (DESIGN.md, "Terms in the core"):
+//
+//   pi = (C11, C22, C12),   C21 = C12.
+//
+// Derivatives are taken with respect to pi, not C: since C12 and C21 are one
+// variable, dW/dpi3 = dW/dC12 + dW/dC21 = 2 (dW/dC)_12, and the second
+// Piola-Kirchhoff stress S = 2 DW(C) (paper eq. (6)) reads
+//
+//   S11 = 2 dW/dpi1,   S22 = 2 dW/dpi2,   S12 = S21 = dW/dpi3.
+//
+// Models:
+//   St. Venant-Kirchhoff (the paper's material), E = (C - I)/2,
+//     W = lambda/2 (tr E)^2 + mu tr(E^2)            quadratic in pi;
+//   compressible Neo-Hooke, J = sqrt(det C),
+//     W = mu/2 (tr C - 2) - mu ln J + lambda/2 (ln J)^2
+//   (tr and det of the 2x2 block: C33 = 1 contributes tr 1 - 1 = 0, ln 1 = 0).
+#pragma once
+
+#include <Eigen/Dense>
+#include <string>
+
+namespace emdae {
+
+enum class MaterialModel { SaintVenantKirchhoff, NeoHooke };
+
+/// Name used in scene files and messages: "svk" or "neo-hooke".
+std::string material_model_name(MaterialModel model);
+/// Inverse of material_model_name; throws std::invalid_argument naming the
+/// value received and the known names.
+MaterialModel parse_material_model(const std::string& name);
+
+/// A plane-strain hyperelastic material. Construct with make_material(); the
+/// Lame parameters are derived from E and nu.
+struct Material {
+  MaterialModel model = MaterialModel::SaintVenantKirchhoff;
+  double young = 0.0;    // E
+  double poisson = 0.0;  // nu
+  double density = 0.0;  // rho_R, reference mass density
+  double lambda = 0.0;   // E nu / ((1 + nu)(1 - 2 nu))
+  double mu = 0.0;       // E / (2 (1 + nu))
+
+  /// W(pi), pi = (C11, C22, C12). +infinity when det C <= 0 for Neo-Hooke
+  /// (the energy barrier of an inverted material point).
+  double energy(const Eigen::Vector3d& pi) const;
+  /// dW/dpi (note the factor 2 on the C12 component, see above).
+  Eigen::Vector3d energy_gradient(const Eigen::Vector3d& pi) const;
+  /// d^2 W / dpi^2.
+  Eigen::Matrix3d energy_hessian(const Eigen::Vector3d& pi) const;
+  /// Second Piola-Kirchhoff stress S = 2 DW(C) as a symmetric 2x2 matrix.
+  Eigen::Matrix2d second_piola_kirchhoff(const Eigen::Vector3d& pi) const;
+
+  /// True when W is (at most) quadratic in pi, so that the discrete gradient
+  /// is the gradient at pi_mid (paper eq. (38)) and needs no correction.
+  bool quadratic_in_invariants() const { return model == MaterialModel::SaintVenantKirchhoff; }
+  /// E.g. "svk (E = 100, nu = 0.1, rho = 0.001)".
+  std::string describe() const;
+};
+
+/// Checks E > 0, -1 < nu < 0.5, rho > 0 and derives lambda, mu. Throws
+/// std::invalid_argument naming the offending value; the caller adds where
+/// it came from (body, key).
+Material make_material(MaterialModel model, double young, double poisson, double density);
+
+}  // namespace emdae

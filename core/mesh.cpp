@@ -1,0 +1,211 @@
+#include "core/mesh.hpp"
+
+#include <cmath>
+#include <memory>
+#include <sstream>
+#include <stdexcept>
+
+#include "core/fe_element.hpp"
+
+namespace emdae {
+
+namespace {
+
+void check_count(int n, const char* what) {
+  if (n < 1)
+    throw std::invalid_argument(std::string(what) + " must be >= 1, received " + std::to_string(n));
+}
+
+void check_length(double x, const char* what) {
+  if (!(x > 0.0) || !std::isfinite(x)) {
+    std::ostringstream s;
+    s << what << " must be positive and finite, received " << x;
+    throw std::invalid_argument(s.str());
+  }
+}
+
+}  // namespace
+
+std::array<Eigen::Vector2d, 4> Mesh::quad_nodes(int e) const {
+  std::array<Eigen::Vector2d, 4> x;
+  const auto& quad = quads[static_cast<std::size_t>(e)];
+  for (std::size_t a = 0; a < 4; ++a) x[a] = nodes[static_cast<std::size_t>(quad[a])];
+  return x;
+}
+
+double Mesh::area() const {
+  double a = 0.0;
+  for (int e = 0; e < n_elements(); ++e) a += q1_area(quad_nodes(e));
+  return a;
+}
+
+Eigen::Vector2d Mesh::centroid() const {
+  Eigen::Vector2d s = Eigen::Vector2d::Zero();
+  double a = 0.0;
+  for (int e = 0; e < n_elements(); ++e) {
+    const auto x = quad_nodes(e);
+    s += q1_first_moment(x);
+    a += q1_area(x);
+  }
+  return s / a;
+}
+
+void Mesh::validate() const {
+  if (nodes.empty() || quads.empty())
+    throw std::invalid_argument("mesh is empty (" + std::to_string(nodes.size()) + " nodes, " +
+                                std::to_string(quads.size()) + " quads)");
+  const auto in_range = [&](int n) { return n >= 0 && n < n_nodes(); };
+  for (int e = 0; e < n_elements(); ++e) {
+    const auto& q = quads[static_cast<std::size_t>(e)];
+    for (std::size_t a = 0; a < 4; ++a) {
+      if (!in_range(q[a]))
+        throw std::invalid_argument("quad " + std::to_string(e) + " refers to node " +
+                                    std::to_string(q[a]) + " of a mesh with " +
+                                    std::to_string(n_nodes()) + " nodes");
+      for (std::size_t b = 0; b < a; ++b)
+        if (q[a] == q[b])
+          throw std::invalid_argument("quad " + std::to_string(e) + " repeats node " +
+                                      std::to_string(q[a]));
+    }
+  }
+  for (const auto& [name, set] : node_sets)
+    for (int n : set)
+      if (!in_range(n))
+        throw std::invalid_argument("node set '" + name + "' refers to node " + std::to_string(n) +
+                                    " of a mesh with " + std::to_string(n_nodes()) + " nodes");
+  for (const auto& [name, set] : edge_sets)
+    for (const auto& edge : set)
+      if (!in_range(edge[0]) || !in_range(edge[1]))
+        throw std::invalid_argument("edge set '" + name + "' refers to edge (" +
+                                    std::to_string(edge[0]) + ", " + std::to_string(edge[1]) +
+                                    ") of a mesh with " + std::to_string(n_nodes()) + " nodes");
+}
+
+Mesh ring_mesh(const Eigen::Vector2d& centre, double inner_radius, double outer_radius,
+               int n_around, int n_through) {
+  check_length(inner_radius, "ring inner radius");
+  check_length(outer_radius, "ring outer radius");
+  if (!(outer_radius > inner_radius)) {
+    std::ostringstream s;
+    s << "ring outer radius must exceed the inner radius " << inner_radius << ", received "
+      << outer_radius;
+    throw std::invalid_argument(s.str());
+  }
+  // Three elements around are the fewest that close a ring of convex quads.
+  if (n_around < 3)
+    throw std::invalid_argument("ring elements around must be >= 3, received " +
+                                std::to_string(n_around));
+  check_count(n_through, "ring elements through the wall");
+
+  Mesh m;
+  const double pi = std::acos(-1.0);
+  const auto node = [&](int j, int i) { return j * n_around + (i % n_around); };
+  for (int j = 0; j <= n_through; ++j) {
+    const double r = inner_radius + (outer_radius - inner_radius) * j / n_through;
+    for (int i = 0; i < n_around; ++i) {
+      const double theta = 2.0 * pi * i / n_around;
+      m.nodes.emplace_back(centre + r * Eigen::Vector2d(std::cos(theta), std::sin(theta)));
+    }
+  }
+  // (r, theta) -> X preserves orientation (det = r > 0): counter-clockwise in
+  // the (r, theta) plane is counter-clockwise in X.
+  for (int j = 0; j < n_through; ++j)
+    for (int i = 0; i < n_around; ++i)
+      m.quads.push_back({node(j, i), node(j + 1, i), node(j + 1, i + 1), node(j, i + 1)});
+  auto& inner = m.node_sets["inner"];
+  auto& outer = m.node_sets["outer"];
+  auto& inner_edges = m.edge_sets["inner"];
+  auto& outer_edges = m.edge_sets["outer"];
+  for (int i = 0; i < n_around; ++i) {
+    inner.push_back(node(0, i));
+    outer.push_back(node(n_through, i));
+    // The element runs its inner edge from angle i+1 back to i (clockwise
+    // about the centre), its outer edge from i to i+1.
+    inner_edges.push_back({node(0, i + 1), node(0, i)});
+    outer_edges.push_back({node(n_through, i), node(n_through, i + 1)});
+  }
+  return m;
+}
+
+Mesh rectangle_mesh(const Eigen::Vector2d& origin, double width, double height, int nx, int ny) {
+  check_length(width, "rectangle width");
+  check_length(height, "rectangle height");
+  check_count(nx, "rectangle elements along x");
+  check_count(ny, "rectangle elements along y");
+  Mesh m;
+  const auto node = [&](int i, int j) { return j * (nx + 1) + i; };
+  for (int j = 0; j <= ny; ++j)
+    for (int i = 0; i <= nx; ++i)
+      m.nodes.emplace_back(origin + Eigen::Vector2d(width * i / nx, height * j / ny));
+  for (int j = 0; j < ny; ++j)
+    for (int i = 0; i < nx; ++i)
+      m.quads.push_back({node(i, j), node(i + 1, j), node(i + 1, j + 1), node(i, j + 1)});
+  for (int i = 0; i <= nx; ++i) {
+    m.node_sets["bottom"].push_back(node(i, 0));
+    m.node_sets["top"].push_back(node(i, ny));
+  }
+  for (int j = 0; j <= ny; ++j) {
+    m.node_sets["left"].push_back(node(0, j));
+    m.node_sets["right"].push_back(node(nx, j));
+  }
+  // Counter-clockwise about the body: bottom left to right, right upwards,
+  // top right to left, left downwards.
+  for (int i = 0; i < nx; ++i) {
+    m.edge_sets["bottom"].push_back({node(i, 0), node(i + 1, 0)});
+    m.edge_sets["top"].push_back({node(i + 1, ny), node(i, ny)});
+  }
+  for (int j = 0; j < ny; ++j) {
+    m.edge_sets["right"].push_back({node(nx, j), node(nx, j + 1)});
+    m.edge_sets["left"].push_back({node(0, j + 1), node(0, j)});
+  }
+  return m;
+}
+
+BodyInfo add_body(System& system, const Mesh& mesh, const Material& material,
+                  const BodyOptions& options) {
+  const std::string where = "body '" + options.name + "'";
+  if (system.dim() != 2)
+    throw std::invalid_argument(where + ": Q1 plane-strain bodies need a 2D system, received dim " +
+                                std::to_string(system.dim()));
+  try {
+    mesh.validate();
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument(where + ": " + e.what());
+  }
+  // Build every element before touching the system, so that a bad element
+  // leaves the system as it was.
+  const auto body_name = std::make_shared<const std::string>(options.name);
+  const int offset = system.n_nodes();
+  std::vector<std::unique_ptr<Q1Element>> elements;
+  elements.reserve(mesh.quads.size());
+  for (int e = 0; e < mesh.n_elements(); ++e) {
+    std::vector<int> dofs;
+    dofs.reserve(8);
+    for (int n : mesh.quads[static_cast<std::size_t>(e)])
+      for (int d = 0; d < 2; ++d) dofs.push_back(system.dof(offset + n, d));
+    elements.push_back(
+        std::make_unique<Q1Element>(std::move(dofs), mesh.quad_nodes(e), material, e, body_name));
+  }
+
+  const Eigen::Vector2d centre = mesh.centroid();
+  const double omega = options.angular_velocity;
+  for (const auto& x : mesh.nodes) {
+    const Eigen::Vector2d r = x - centre;
+    const Eigen::Vector2d v = options.velocity + omega * Eigen::Vector2d(-r.y(), r.x());
+    system.add_node(x, v);
+  }
+  BodyInfo info;
+  info.node_offset = offset;
+  info.n_nodes = mesh.n_nodes();
+  info.n_elements = mesh.n_elements();
+  info.first_potential = static_cast<int>(system.potentials().size());
+  for (int e = 0; e < mesh.n_elements(); ++e) {
+    std::array<int, 4> nodes = mesh.quads[static_cast<std::size_t>(e)];
+    for (int& n : nodes) n += offset;
+    add_q1_mass(system, nodes, mesh.quad_nodes(e), material.density, options.lumped_mass);
+    system.add_potential(std::move(elements[static_cast<std::size_t>(e)]));
+  }
+  return info;
+}
+
+}  // namespace emdae

@@ -1,0 +1,669 @@
+// Planar Q1 bodies (core/material, core/fe_element, core/mesh) checked against
+// closed-form solutions and against the defining properties of the schemes:
+//  - materials: dW/dpi, d2W/dpi2 against finite differences of W, S against
+//    the textbook stress formulas, parameter checks naming the value;
+//  - element: patch test (homogeneous deformation: no interior force, exact
+//    stress), exact gradient and the Jacobians of all three gradient kinds
+//    against central differences, the discrete gradient's energy identity
+//    (paper eq. (42)) and its momentum properties (eqs. (39)-(40));
+//  - mass: total mass rho * area of the polygonal domain, kinetic energy and
+//    angular momentum of rigid motions against closed forms;
+//  - free flight of a spinning ring: EM conserves energy and momenta at a
+//    large step, the midpoint rule blows up on the same scene; Neo-Hooke
+//    (non-zero discrete-gradient correction) conserves energy too;
+//  - observed order 2 of EM and midpoint on a ring.
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <memory>
+#include <random>
+#include <string>
+#include <utility>
+
+#include "core/fe_element.hpp"
+#include "core/gradient.hpp"
+#include "core/material.hpp"
+#include "core/mesh.hpp"
+#include "core/quantities.hpp"
+#include "integrators/stepper.hpp"
+
+namespace emdae {
+namespace {
+
+// The paper's material (E = 100, nu = 0.1, rho = 0.001).
+Material paper_material(MaterialModel model) {
+  return make_material(model, 100.0, 0.1, 0.001);
+}
+
+const MaterialModel kModels[] = {MaterialModel::SaintVenantKirchhoff, MaterialModel::NeoHooke};
+
+Eigen::Vector3d invariants_of(const Eigen::Matrix2d& f) {
+  const Eigen::Matrix2d c = f.transpose() * f;
+  return {c(0, 0), c(1, 1), c(0, 1)};
+}
+
+// Textbook plane-strain stresses, written independently of material.cpp:
+// SVK S = lambda tr(E) I + 2 mu E, Neo-Hooke S = mu (I - C^-1) + lambda ln J C^-1.
+Eigen::Matrix2d textbook_stress(const Material& m, const Eigen::Matrix2d& f) {
+  const Eigen::Matrix2d c = f.transpose() * f;
+  const Eigen::Matrix2d id = Eigen::Matrix2d::Identity();
+  if (m.model == MaterialModel::SaintVenantKirchhoff) {
+    const Eigen::Matrix2d e = 0.5 * (c - id);
+    return m.lambda * e.trace() * id + 2.0 * m.mu * e;
+  }
+  const Eigen::Matrix2d c_inv = c.inverse();
+  return m.mu * (id - c_inv) + m.lambda * std::log(f.determinant()) * c_inv;
+}
+
+double max_abs(const Mat& a) {
+  return a.cwiseAbs().maxCoeff();
+}
+
+// Global gradient of the potential terms of `s` and, optionally, its dense
+// Jacobian w.r.t. q1 (the meshes here are small).
+Vec assemble_gradient(const System& s, GradientKind kind, const Vec& q0, const Vec& q1,
+                      Mat* jac = nullptr) {
+  Vec f = Vec::Zero(s.n_dofs());
+  if (jac) jac->setZero(s.n_dofs(), s.n_dofs());
+  TermWorkspace ws;
+  Vec l0, l1, g;
+  Mat k;
+  for (const auto& term : s.potentials()) {
+    gather(*term, q0, l0);
+    gather(*term, q1, l1);
+    term_gradient(*term, kind, l0, l1, 0.0, 0.0, g, jac ? &k : nullptr, ws);
+    const auto& dofs = term->dofs();
+    for (std::size_t i = 0; i < dofs.size(); ++i) {
+      f[dofs[i]] += g[static_cast<Eigen::Index>(i)];
+      if (jac)
+        for (std::size_t j = 0; j < dofs.size(); ++j)
+          (*jac)(dofs[i], dofs[j]) += k(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j));
+    }
+  }
+  return f;
+}
+
+// sum over elements of Dpi(q_mid)^T grad f~((pi(q0) + pi(q1)) / 2): the
+// discrete gradient without the correction term of paper eq. (35).
+Vec averaged_stress_gradient(const System& s, const Vec& q0, const Vec& q1) {
+  Vec f = Vec::Zero(s.n_dofs());
+  Vec l0, l1, pi0, pi1, g(3);
+  Mat dpi;
+  for (const auto& term : s.potentials()) {
+    gather(*term, q0, l0);
+    gather(*term, q1, l1);
+    term->invariants(l0, pi0);
+    term->invariants(l1, pi1);
+    term->invariant_jacobian(0.5 * (l0 + l1), dpi);
+    const Vec pim = 0.5 * (pi0 + pi1);
+    Vec gt(term->n_invariants());
+    for (int b = 0; b < term->n_blocks(); ++b) {
+      term->block_gradient(b, pim.segment(3 * b, 3), 0.0, g);
+      gt.segment(3 * b, 3) = g;
+    }
+    const Vec local = dpi.transpose() * gt;
+    const auto& dofs = term->dofs();
+    for (std::size_t i = 0; i < dofs.size(); ++i) f[dofs[i]] += local[static_cast<Eigen::Index>(i)];
+  }
+  return f;
+}
+
+// 3x3 rectangle with its interior nodes (5, 6, 9, 10) and two boundary nodes
+// moved: every element is a general (non-parallelogram) quad.
+Mesh distorted_patch() {
+  Mesh m = rectangle_mesh(Eigen::Vector2d(0.0, 0.0), 3.0, 2.0, 3, 3);
+  m.nodes[5] += Eigen::Vector2d(0.22, -0.10);
+  m.nodes[6] += Eigen::Vector2d(-0.15, 0.12);
+  m.nodes[9] += Eigen::Vector2d(0.12, 0.14);
+  m.nodes[10] += Eigen::Vector2d(-0.20, -0.09);
+  m.nodes[1] += Eigen::Vector2d(0.17, 0.0);   // along the bottom edge
+  m.nodes[7] += Eigen::Vector2d(0.0, -0.13);  // along the right edge
+  return m;
+}
+
+// --- materials ---------------------------------------------------------------
+
+// dW/dpi and d2W/dpi2 against central differences of W and dW/dpi; S against
+// the textbook formulas; at a random finite strain for both models.
+TEST(Material, DerivativesMatchFiniteDifferencesAndTextbookStress) {
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> u(-0.3, 0.3);
+  for (MaterialModel model : kModels) {
+    const Material mat = paper_material(model);
+    for (int trial = 0; trial < 5; ++trial) {
+      Eigen::Matrix2d f = Eigen::Matrix2d::Identity();
+      f += Eigen::Matrix2d::NullaryExpr([&] { return u(rng); });
+      const Eigen::Vector3d pi = invariants_of(f);
+      const Eigen::Vector3d g = mat.energy_gradient(pi);
+      const Eigen::Matrix3d h = mat.energy_hessian(pi);
+      const double eps = 1e-5;
+      Eigen::Vector3d g_fd;
+      Eigen::Matrix3d h_fd;
+      for (int k = 0; k < 3; ++k) {
+        Eigen::Vector3d e = Eigen::Vector3d::Zero();
+        e[k] = eps;
+        g_fd[k] = (mat.energy(pi + e) - mat.energy(pi - e)) / (2 * eps);
+        h_fd.col(k) = (mat.energy_gradient(pi + e) - mat.energy_gradient(pi - e)) / (2 * eps);
+      }
+      EXPECT_LE((g - g_fd).cwiseAbs().maxCoeff(), 1e-7 * g.cwiseAbs().maxCoeff()) << mat.describe();
+      EXPECT_LE((h - h_fd).cwiseAbs().maxCoeff(), 1e-7 * h.cwiseAbs().maxCoeff()) << mat.describe();
+      EXPECT_LE(max_abs(h - h.transpose()), 1e-12 * max_abs(h));
+      const Eigen::Matrix2d s = textbook_stress(mat, f);
+      EXPECT_LE(max_abs(mat.second_piola_kirchhoff(pi) - s), 1e-12 * max_abs(s)) << mat.describe();
+    }
+    // Stress-free reference state: W = 0, S = 0.
+    const Eigen::Vector3d id(1.0, 1.0, 0.0);
+    EXPECT_NEAR(mat.energy(id), 0.0, 1e-14);
+    EXPECT_LE(mat.energy_gradient(id).norm(), 1e-13);
+  }
+  // The reference (linearized) moduli agree: both materials are the same
+  // isotropic material at small strain.
+  const auto svk = paper_material(MaterialModel::SaintVenantKirchhoff);
+  const auto nh = paper_material(MaterialModel::NeoHooke);
+  const Eigen::Vector3d id(1.0, 1.0, 0.0);
+  EXPECT_LE(max_abs(svk.energy_hessian(id) - nh.energy_hessian(id)),
+            1e-12 * max_abs(svk.energy_hessian(id)));
+  // lambda, mu from E = 100, nu = 0.1: mu = 100/2.2, lambda = 10/(1.1 * 0.8).
+  EXPECT_NEAR(svk.mu, 100.0 / 2.2, 1e-12);
+  EXPECT_NEAR(svk.lambda, 10.0 / 0.88, 1e-12);
+  // An inverted material point has infinite Neo-Hooke energy.
+  EXPECT_TRUE(std::isinf(nh.energy(Eigen::Vector3d(1.0, 1.0, 1.5))));
+}
+
+// Invalid parameters are rejected with a message that names the value.
+TEST(Material, RejectsInvalidParametersNamingTheValue) {
+  const auto message = [](double e, double nu, double rho) -> std::string {
+    try {
+      make_material(MaterialModel::NeoHooke, e, nu, rho);
+    } catch (const std::invalid_argument& ex) {
+      return ex.what();
+    }
+    return "";
+  };
+  EXPECT_NE(message(-3.5, 0.1, 1.0).find("received -3.5"), std::string::npos);
+  EXPECT_NE(message(100.0, 0.5, 1.0).find("received 0.5"), std::string::npos);
+  EXPECT_NE(message(100.0, -1.0, 1.0).find("received -1"), std::string::npos);
+  EXPECT_NE(message(100.0, 0.3, 0.0).find("received 0"), std::string::npos);
+  EXPECT_EQ(message(100.0, 0.49, 1.0), "");
+  EXPECT_EQ(parse_material_model("neo-hooke"), MaterialModel::NeoHooke);
+  EXPECT_THROW(parse_material_model("rubber"), std::invalid_argument);
+}
+
+// --- element and mesh --------------------------------------------------------
+
+// A clockwise or collapsed reference element is rejected, naming the element
+// (directly and through add_body, which also names the body).
+TEST(Element, InvertedOrDegenerateReferenceElementIsRejected) {
+  const Material mat = paper_material(MaterialModel::SaintVenantKirchhoff);
+  const std::vector<int> dofs = {0, 1, 2, 3, 4, 5, 6, 7};
+  const QuadNodes clockwise = {Eigen::Vector2d(0, 0), Eigen::Vector2d(0, 1), Eigen::Vector2d(1, 1),
+                               Eigen::Vector2d(1, 0)};
+  const QuadNodes collapsed = {Eigen::Vector2d(0, 0), Eigen::Vector2d(1, 0), Eigen::Vector2d(2, 0),
+                               Eigen::Vector2d(1, 1)};
+  const auto body = std::make_shared<const std::string>("plate");
+  for (const QuadNodes& x : {clockwise, collapsed}) {
+    try {
+      const Q1Element e(dofs, x, mat, 7, body);
+      ADD_FAILURE() << e.describe() << "accepted an invalid element";
+    } catch (const std::invalid_argument& ex) {
+      EXPECT_NE(std::string(ex.what()).find("Q1 element 7 of body 'plate'"), std::string::npos)
+          << ex.what();
+      EXPECT_NE(std::string(ex.what()).find("det J0"), std::string::npos) << ex.what();
+    }
+  }
+  Mesh m = rectangle_mesh(Eigen::Vector2d(0, 0), 2.0, 1.0, 2, 1);
+  std::swap(m.quads[1][1], m.quads[1][3]);  // element 1 clockwise
+  System s(2);
+  try {
+    add_body(s, m, mat, BodyOptions{false, Eigen::Vector2d::Zero(), 0.0, "bad"});
+    ADD_FAILURE() << "accepted an inverted mesh";
+  } catch (const std::invalid_argument& ex) {
+    EXPECT_NE(std::string(ex.what()).find("Q1 element 1 of body 'bad'"), std::string::npos)
+        << ex.what();
+  }
+  EXPECT_EQ(s.n_nodes(), 0);  // nothing was added
+  EXPECT_THROW(ring_mesh(Eigen::Vector2d::Zero(), 10.0, 9.0, 16, 1), std::invalid_argument);
+  EXPECT_THROW(rectangle_mesh(Eigen::Vector2d::Zero(), 1.0, 1.0, 0, 1), std::invalid_argument);
+}
+
+// Boundary edge sets: the outward normal (dy, -dx) of every edge points away
+// from the body (ring: radially, sign by set; rectangle: the side's normal),
+// and the sets cover the boundary (lengths add up to the perimeters).
+TEST(Mesh, BoundarySetsAreOrientedWithOutwardNormals) {
+  const Eigen::Vector2d c(1.0, -2.0);
+  const Mesh ring = ring_mesh(c, 9.0, 10.0, 32, 2);
+  EXPECT_EQ(ring.n_nodes(), 96);
+  EXPECT_EQ(ring.n_elements(), 64);
+  const std::pair<std::string, double> ring_sides[] = {{"outer", 1.0}, {"inner", -1.0}};
+  for (const auto& [name, sign] : ring_sides) {
+    double length = 0.0;
+    for (const auto& e : ring.edge_sets.at(name)) {
+      const Eigen::Vector2d a = ring.nodes[static_cast<std::size_t>(e[0])];
+      const Eigen::Vector2d b = ring.nodes[static_cast<std::size_t>(e[1])];
+      const Eigen::Vector2d d = b - a, normal(d.y(), -d.x());
+      EXPECT_GT(sign * normal.dot(0.5 * (a + b) - c), 0.0) << name;
+      length += d.norm();
+    }
+    const double r = name == "outer" ? 10.0 : 9.0;
+    EXPECT_NEAR(length, 2 * 32 * r * std::sin(std::acos(-1.0) / 32), 1e-12);
+    EXPECT_EQ(ring.node_sets.at(name).size(), 32u);
+  }
+  const Mesh rect = rectangle_mesh(Eigen::Vector2d(-1.0, 0.5), 3.0, 2.0, 6, 4);
+  const std::pair<std::string, Eigen::Vector2d> sides[] = {
+      {"bottom", {0, -1}}, {"right", {1, 0}}, {"top", {0, 1}}, {"left", {-1, 0}}};
+  for (const auto& [name, outward] : sides) {
+    double length = 0.0;
+    for (const auto& e : rect.edge_sets.at(name)) {
+      const Eigen::Vector2d d =
+          rect.nodes[static_cast<std::size_t>(e[1])] - rect.nodes[static_cast<std::size_t>(e[0])];
+      EXPECT_NEAR(Eigen::Vector2d(d.y(), -d.x()).normalized().dot(outward), 1.0, 1e-14) << name;
+      length += d.norm();
+    }
+    EXPECT_NEAR(length, outward.x() != 0 ? 2.0 : 3.0, 1e-13) << name;
+  }
+  EXPECT_NEAR(rect.area(), 6.0, 1e-13);
+  EXPECT_LE((rect.centroid() - Eigen::Vector2d(0.5, 1.5)).norm(), 1e-14);
+}
+
+// Patch test: all nodes of a distorted mesh at q = F0 X + c. C is then the
+// same everywhere, so the internal force at interior nodes vanishes (Q1 with
+// 2x2 Gauss integrates grad N_A exactly) and S equals the textbook S(F0) at
+// every Gauss point. Then the interior nodes are disturbed and the static
+// equilibrium is solved by Newton with the exact Jacobian: it must return to
+// the homogeneous state.
+TEST(PatchTest, HomogeneousDeformationIsReproduced) {
+  Eigen::Matrix2d f0;
+  f0 << 1.2, 0.3, -0.1, 0.9;
+  const Eigen::Vector2d shift(0.5, -0.2);
+  const std::vector<int> interior = {5, 6, 9, 10};
+  for (MaterialModel model : kModels) {
+    const Material mat = paper_material(model);
+    const Mesh mesh = distorted_patch();
+    System s(2);
+    add_body(s, mesh, mat);
+    Vec q(s.n_dofs());
+    for (int a = 0; a < mesh.n_nodes(); ++a)
+      q.segment<2>(2 * a) = f0 * mesh.nodes[static_cast<std::size_t>(a)] + shift;
+    const Vec f = assemble_gradient(s, GradientKind::Exact, q, q);
+    const double boundary_scale = f.cwiseAbs().maxCoeff();
+    ASSERT_GT(boundary_scale, 1.0);  // the boundary carries the load
+    for (int a : interior)
+      EXPECT_LE(f.segment<2>(2 * a).cwiseAbs().maxCoeff(), 1e-12 * boundary_scale)
+          << mat.describe() << " node " << a;
+    const Eigen::Matrix2d s_exact = textbook_stress(mat, f0);
+    Vec local;
+    for (const auto& term : s.potentials()) {
+      const auto& e = dynamic_cast<const Q1Element&>(*term);
+      gather(e, q, local);
+      for (int g = 0; g < Q1Element::kGaussPoints; ++g)
+        EXPECT_LE(max_abs(e.second_piola_kirchhoff(local, g) - s_exact), 1e-12 * max_abs(s_exact))
+            << e.describe() << " Gauss point " << g;
+    }
+
+    // Static solve for the interior dofs from a disturbed start.
+    Vec x = q;
+    std::mt19937 rng(3);
+    std::uniform_real_distribution<double> u(-0.05, 0.05);
+    for (int a : interior) x.segment<2>(2 * a) += Eigen::Vector2d(u(rng), u(rng));
+    std::vector<int> free;
+    for (int a : interior) free.insert(free.end(), {2 * a, 2 * a + 1});
+    const int n = static_cast<int>(free.size());
+    int iterations = 0;
+    double residual = 0.0;
+    for (; iterations < 20; ++iterations) {
+      Mat k;
+      const Vec g = assemble_gradient(s, GradientKind::Exact, x, x, &k);
+      Vec r(n);
+      Mat kff(n, n);
+      for (int i = 0; i < n; ++i) {
+        r[i] = g[free[static_cast<std::size_t>(i)]];
+        for (int j = 0; j < n; ++j)
+          kff(i, j) = k(free[static_cast<std::size_t>(i)], free[static_cast<std::size_t>(j)]);
+      }
+      residual = r.cwiseAbs().maxCoeff();
+      if (residual <= 1e-13 * boundary_scale) break;
+      const Vec dx = kff.partialPivLu().solve(-r);
+      for (int i = 0; i < n; ++i) x[free[static_cast<std::size_t>(i)]] += dx[i];
+    }
+    EXPECT_LE(residual, 1e-13 * boundary_scale) << mat.describe();
+    EXPECT_LE(iterations, 6) << mat.describe() << ": Newton should converge quadratically";
+    EXPECT_LE((x - q).cwiseAbs().maxCoeff(), 1e-12) << mat.describe();
+  }
+}
+
+// Random states of a distorted mesh: q0 = X + noise, q1 = rotated, shifted
+// and stretched q0 + noise. For every material:
+//  - grad_bar V(q0, q1) . (q1 - q0) = V(q1) - V(q0)   (paper eq. (42))
+//  - sum_A grad_bar_A = 0, sum_A q_mid,A x grad_bar_A = 0   (eqs. (39)-(40))
+//  - grad_bar V(q, q) = grad V(q)                          (consistency)
+//  - SVK (W quadratic in pi): grad_bar is the "averaged stress" gradient
+//    Dpi(q_mid)^T grad f~((pi_0 + pi_1)/2), the correction of eq. (35)
+//    vanishes; Neo-Hooke: it does not;
+//  - the midpoint gradient violates the identity (both materials).
+TEST(DiscreteGradient, EnergyIdentityAndMomentumOnRandomConfigurations) {
+  const Mesh mesh = distorted_patch();
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  for (MaterialModel model : kModels) {
+    const Material mat = paper_material(model);
+    System s(2);
+    add_body(s, mesh, mat);
+    for (int trial = 0; trial < 4; ++trial) {
+      // Two regimes: large steps (|dpi| ~ 0.1, the quotient of eq. (35)) and
+      // small ones (|dpi| ~ 1e-3, its well-conditioned evaluation).
+      const double step = trial < 2 ? 0.15 : 1e-3;
+      Vec q0 = s.initial_positions(), q1(s.n_dofs());
+      for (int i = 0; i < q0.size(); ++i) q0[i] += 0.1 * u(rng);
+      const double angle = 0.7 * u(rng);
+      Eigen::Matrix2d rot;
+      rot << std::cos(angle), -std::sin(angle), std::sin(angle), std::cos(angle);
+      const Eigen::Matrix2d stretch =
+          Eigen::Matrix2d::Identity() + step * Eigen::Matrix2d::NullaryExpr([&] { return u(rng); });
+      for (int a = 0; a < s.n_nodes(); ++a)
+        q1.segment<2>(2 * a) = rot * stretch * q0.segment<2>(2 * a) + Eigen::Vector2d(3.0, -1.0);
+      for (int i = 0; i < q1.size(); ++i) q1[i] += 0.3 * step * u(rng);
+
+      const Vec g = assemble_gradient(s, GradientKind::Discrete, q0, q1);
+      const double dv = potential_energy(s, q1, 0.0) - potential_energy(s, q0, 0.0);
+      ASSERT_GT(std::abs(dv), 1e-4 * potential_energy(s, q1, 0.0));
+      EXPECT_LE(std::abs(g.dot(q1 - q0) - dv), (step > 0.01 ? 1e-12 : 1e-10) * std::abs(dv))
+          << mat.describe() << " step " << step;
+
+      const Vec qm = 0.5 * (q0 + q1);
+      Eigen::Vector2d force = Eigen::Vector2d::Zero();
+      double torque = 0.0, scale = 0.0;
+      for (int a = 0; a < s.n_nodes(); ++a) {
+        const Eigen::Vector2d ga = g.segment<2>(2 * a), xa = qm.segment<2>(2 * a);
+        force += ga;
+        torque += xa.x() * ga.y() - xa.y() * ga.x();
+        scale += ga.norm() * xa.norm();
+      }
+      EXPECT_LE(force.norm(), 1e-13 * g.norm());
+      EXPECT_LE(std::abs(torque), 1e-14 * scale);
+
+      const Vec ga = averaged_stress_gradient(s, q0, q1);
+      const double correction = (g - ga).norm() / ga.norm();
+      if (model == MaterialModel::SaintVenantKirchhoff) {
+        EXPECT_LE(correction, 1e-14);
+      } else if (step > 0.01) {
+        EXPECT_GT(correction, 1e-4);
+      }
+      const Vec gm = assemble_gradient(s, GradientKind::Midpoint, q0, q1);
+      if (step > 0.01) {
+        EXPECT_GT(std::abs(gm.dot(q1 - q0) - dv), 1e-4 * std::abs(dv));
+      }
+    }
+    const Vec q =
+        s.initial_positions() + 0.1 * Vec::NullaryExpr(s.n_dofs(), [&] { return u(rng); });
+    const Vec ge = assemble_gradient(s, GradientKind::Exact, q, q);
+    EXPECT_LE((assemble_gradient(s, GradientKind::Discrete, q, q) - ge).norm(), 1e-14 * ge.norm());
+  }
+}
+
+// Finite-difference checks on one distorted element at a random state: the
+// exact gradient against central differences of the energy, and the Jacobian
+// w.r.t. q1 of each gradient kind (exact, midpoint, discrete; the latter for a
+// large and a small step) against central differences of that gradient.
+TEST(Element, GradientsAndJacobiansMatchFiniteDifferences) {
+  const QuadNodes x = {Eigen::Vector2d(0.0, 0.0), Eigen::Vector2d(1.3, 0.2),
+                       Eigen::Vector2d(1.1, 1.0), Eigen::Vector2d(-0.2, 0.8)};
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  for (MaterialModel model : kModels) {
+    const Material mat = paper_material(model);
+    const Q1Element e({0, 1, 2, 3, 4, 5, 6, 7}, x, mat);
+    Vec q0(8);
+    for (int a = 0; a < 4; ++a) q0.segment<2>(2 * a) = x[static_cast<std::size_t>(a)];
+    for (int i = 0; i < 8; ++i) q0[i] += 0.15 * u(rng);
+    TermWorkspace ws;
+    const double h = 1e-6;
+
+    Vec g;
+    term_gradient(e, GradientKind::Exact, q0, q0, 0.0, 0.0, g, nullptr, ws);
+    Vec g_fd(8);
+    for (int i = 0; i < 8; ++i) {
+      Vec qp = q0, qm = q0;
+      qp[i] += h;
+      qm[i] -= h;
+      g_fd[i] = (e.value(qp, 0.0) - e.value(qm, 0.0)) / (2 * h);
+    }
+    EXPECT_LE((g - g_fd).cwiseAbs().maxCoeff(), 1e-6 * g.cwiseAbs().maxCoeff()) << mat.describe();
+
+    for (double step : {0.2, 2e-3}) {
+      Vec q1 = q0;
+      for (int i = 0; i < 8; ++i) q1[i] += step * u(rng);
+      for (GradientKind kind :
+           {GradientKind::Exact, GradientKind::Midpoint, GradientKind::Discrete}) {
+        Mat jac;
+        term_gradient(e, kind, q0, q1, 0.0, 0.0, g, &jac, ws);
+        Mat jac_fd(8, 8);
+        Vec gp, gm;
+        for (int i = 0; i < 8; ++i) {
+          Vec qp = q1, qm = q1;
+          qp[i] += h;
+          qm[i] -= h;
+          term_gradient(e, kind, q0, qp, 0.0, 0.0, gp, nullptr, ws);
+          term_gradient(e, kind, q0, qm, 0.0, 0.0, gm, nullptr, ws);
+          jac_fd.col(i) = (gp - gm) / (2 * h);
+        }
+        EXPECT_LE(max_abs(jac - jac_fd), 1e-6 * max_abs(jac))
+            << mat.describe() << " kind " << static_cast<int>(kind) << " step " << step;
+      }
+    }
+  }
+}
+
+// --- mass ----------------------------------------------------------------------
+
+// Consistent mass (paper eq. (13)) of a ring and a rectangle: total mass
+// rho * area (the ring's domain is the polygonal annulus,
+// area n/2 sin(2 pi/n) (ro^2 - ri^2)); a rigid translation v has kinetic
+// energy m |v|^2 / 2 and momentum m v (consistent and lumped); a rigid spin
+// omega about the centroid c has kinetic energy omega^2 rho J / 2 and angular
+// momentum rho J omega + m c x v with the polar moment of the polygonal
+// annulus J = n/12 sin(2 pi/n) (2 + cos(2 pi/n)) (ro^4 - ri^4) (consistent:
+// the rigid velocity field is linear, so interpolated exactly).
+TEST(Mass, TotalMassKineticEnergyAndMomentaOfRigidMotions) {
+  const double rho = 2.5, ri = 9.0, ro = 10.0, pi = std::acos(-1.0);
+  const int n = 32;
+  const double area = 0.5 * n * std::sin(2 * pi / n) * (ro * ro - ri * ri);
+  const double polar = n / 12.0 * std::sin(2 * pi / n) * (2 + std::cos(2 * pi / n)) *
+                       (std::pow(ro, 4) - std::pow(ri, 4));
+  const Material mat = make_material(MaterialModel::SaintVenantKirchhoff, 100.0, 0.1, rho);
+  const Eigen::Vector2d centre(1.0, 2.0), v(0.3, -0.7);
+  for (bool lumped : {false, true}) {
+    System s(2);
+    add_body(s, ring_mesh(centre, ri, ro, n, 2), mat, BodyOptions{lumped, v, 0.0, "ring"});
+    const double m = s.mass().sum() / 2.0;  // M = M_node (x) I_2
+    EXPECT_NEAR(m, rho * area, 1e-12 * rho * area);
+    const Quantities q = measure(s, s.initial_positions(), s.initial_velocities(), 0.0);
+    EXPECT_NEAR(q.kinetic, 0.5 * m * v.squaredNorm(), 1e-12 * q.kinetic);
+    EXPECT_LE((q.linear_momentum - m * v).norm(), 1e-12 * m * v.norm());
+
+    System r(2);
+    add_body(r, rectangle_mesh(Eigen::Vector2d(-1, 0), 3.0, 2.0, 5, 3), mat,
+             BodyOptions{lumped, v, 0.0, "plate"});
+    EXPECT_NEAR(r.mass().sum() / 2.0, rho * 6.0, 1e-12 * rho * 6.0);
+  }
+  const double omega = 0.4;
+  System s(2);
+  add_body(s, ring_mesh(centre, ri, ro, n, 2), mat, BodyOptions{false, v, omega, "ring"});
+  const Quantities q = measure(s, s.initial_positions(), s.initial_velocities(), 0.0);
+  const double m = rho * area;
+  EXPECT_NEAR(q.kinetic, 0.5 * m * v.squaredNorm() + 0.5 * omega * omega * rho * polar,
+              1e-12 * q.kinetic);
+  EXPECT_NEAR(q.angular_momentum[0],
+              rho * polar * omega + m * (centre.x() * v.y() - centre.y() * v.x()),
+              1e-12 * rho * polar * omega);
+}
+
+// Several bodies in one system: node offsets, element dofs and mass are kept
+// apart, and each body keeps its own initial velocity.
+TEST(Mass, SeveralBodiesInOneSystem) {
+  const Material svk = paper_material(MaterialModel::SaintVenantKirchhoff);
+  const Material nh = make_material(MaterialModel::NeoHooke, 50.0, 0.3, 0.002);
+  System s(2);
+  const BodyInfo a = add_body(s, ring_mesh(Eigen::Vector2d(-12, 0), 9, 10, 16, 1), svk,
+                              BodyOptions{false, Eigen::Vector2d(1, 0), 0.0, "left"});
+  const BodyInfo b = add_body(s, rectangle_mesh(Eigen::Vector2d(5, -1), 2, 2, 2, 2), nh,
+                              BodyOptions{true, Eigen::Vector2d(-1, 0), 0.0, "right"});
+  EXPECT_EQ(a.node_offset, 0);
+  EXPECT_EQ(a.n_nodes, 32);
+  EXPECT_EQ(b.node_offset, 32);
+  EXPECT_EQ(b.n_nodes, 9);
+  EXPECT_EQ(b.first_potential, 16);
+  EXPECT_EQ(static_cast<int>(s.potentials().size()), 16 + 4);
+  for (int e = 0; e < b.n_elements; ++e)
+    for (int d : s.potentials()[static_cast<std::size_t>(b.first_potential + e)]->dofs())
+      EXPECT_GE(d, 2 * b.node_offset);
+  const SparseMatrix& mass = s.mass();
+  const Vec ones = Vec::Ones(s.n_dofs());
+  Vec left = Vec::Zero(s.n_dofs()), right = Vec::Zero(s.n_dofs());
+  left.head(64).setOnes();
+  right.tail(18).setOnes();
+  EXPECT_NEAR(left.dot(mass * ones) / 2,
+              0.001 * 16 * std::sin(2 * std::acos(-1.0) / 16) * 19 / 2 * 1, 1e-14);
+  EXPECT_NEAR(right.dot(mass * ones) / 2, 0.002 * 4.0, 1e-15);
+  EXPECT_EQ(left.dot(mass * right), 0.0);  // no coupling between the bodies
+  EXPECT_NO_THROW(s.validate());
+  EXPECT_DOUBLE_EQ(s.initial_velocities()[0], 1.0);
+  EXPECT_DOUBLE_EQ(s.initial_velocities()[2 * 32], -1.0);
+}
+
+// --- time integration ----------------------------------------------------------
+
+struct FlightFigures {
+  bool failed = false;
+  long steps = 0;
+  double energy_err = 0.0, linear_err = 0.0, angular_err = 0.0;
+  int max_iterations = 0;
+  double mean_iterations = 0.0;
+  double seconds = 0.0;
+  Vec q;
+};
+
+// The paper's material on a ring (inner radius 9, outer 10, 64 x 1 elements)
+// translating at (3, -1) and spinning at omega about its centroid. Starting
+// unstressed, the centrifugal load sets off breathing oscillations.
+std::unique_ptr<System> spinning_ring(MaterialModel model, int n_around, double omega) {
+  auto s = std::make_unique<System>(2);
+  add_body(*s, ring_mesh(Eigen::Vector2d(1.0, 2.0), 9.0, 10.0, n_around, 1), paper_material(model),
+           BodyOptions{false, Eigen::Vector2d(3.0, -1.0), omega, "ring"});
+  return s;
+}
+
+FlightFigures fly(const System& s, const std::string& scheme, double dt, long n_steps,
+                  double tolerance = 1e-11) {
+  auto stepper = make_stepper(scheme, s, NewtonSettings{tolerance, 25, false});
+  State st = initial_state(s);
+  const Quantities q0 = measure(s, st.q, st.v, st.t);
+  FlightFigures r;
+  long iterations = 0;
+  const auto start = std::chrono::steady_clock::now();
+  for (; r.steps < n_steps; ++r.steps) {
+    const StepStats stats = stepper->step(st, dt);
+    if (!stats.converged) {
+      r.failed = true;
+      break;
+    }
+    iterations += stats.iterations;
+    r.max_iterations = std::max(r.max_iterations, stats.iterations);
+    const Quantities q = measure(s, st.q, st.v, st.t);
+    r.energy_err = std::max(r.energy_err, std::abs(q.total() - q0.total()) / q0.total());
+    r.linear_err = std::max(
+        r.linear_err, (q.linear_momentum - q0.linear_momentum).norm() / q0.linear_momentum.norm());
+    r.angular_err =
+        std::max(r.angular_err, std::abs(q.angular_momentum[0] - q0.angular_momentum[0]) /
+                                    std::abs(q0.angular_momentum[0]));
+  }
+  r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  r.mean_iterations = r.steps ? double(iterations) / double(r.steps) : 0.0;
+  r.q = st.q;
+  return r;
+}
+
+void report(const char* what, const FlightFigures& r) {
+  std::printf(
+      "  %-22s steps %5ld%s  energy %.2e  p %.2e  L %.2e  Newton mean %.2f max %d  %.2f s\n", what,
+      r.steps, r.failed ? " (Newton failed)" : "", r.energy_err, r.linear_err, r.angular_err,
+      r.mean_iterations, r.max_iterations, r.seconds);
+}
+
+// Free flight, SVK, omega = 5 (rim speed 50, hoop strain ~ rho omega^2 r^2 / E
+// = 2.5e-2), dt = 0.03: about 40 steps per revolution and 10x the explicit
+// stability limit of the wall (h / c ~ 1 / 330). EM over 1000 steps: energy
+// and both momenta conserved to the Newton tolerance. The midpoint rule on the
+// same scene: its energy grows without bound until Newton fails. Observed
+// (Release, x86-64): EM energy 2.8e-13, p 1.3e-14, L 1.3e-13, 3 Newton
+// iterations per step; midpoint energy error 5.7e3 (relative) when Newton
+// failed at step 171 (t = 5.1). At dt = 0.01 the midpoint rule stays bounded
+// (energy error 1.1e-3 over 1000 steps), at 0.05 it fails at step 294 after
+// its energy grew 75-fold: the loss of energy stability is a large-step
+// phenomenon.
+TEST(FreeFlight, SvkRingEnergyMomentumVersusMidpoint) {
+  const auto s = spinning_ring(MaterialModel::SaintVenantKirchhoff, 64, 5.0);
+  const FlightFigures em = fly(*s, "em", 0.03, 1000);
+  report("EM, SVK, dt 0.03", em);
+  ASSERT_FALSE(em.failed);
+  EXPECT_LE(em.energy_err, 1e-9);
+  EXPECT_LE(em.linear_err, 1e-11);
+  EXPECT_LE(em.angular_err, 1e-11);
+  EXPECT_LE(em.max_iterations, 6);
+
+  const FlightFigures mid = fly(*s, "midpoint", 0.03, 1000);
+  report("midpoint, SVK, dt 0.03", mid);
+  // Expectation: blow-up. Either Newton fails or the energy error exceeds
+  // 100 %; in both cases the error exceeds EM's by more than 10 orders.
+  EXPECT_TRUE(mid.failed || mid.energy_err > 1.0);
+  EXPECT_GT(mid.energy_err, 1.0);
+  EXPECT_GT(mid.energy_err, 1e10 * em.energy_err);
+  // Momenta are quadratic invariants of the midpoint rule as well.
+  EXPECT_LE(mid.linear_err, 1e-11);
+}
+
+// The same with Neo-Hooke, where W is not quadratic in C and the correction
+// of paper eq. (35) is active: energy and momenta still conserved.
+TEST(FreeFlight, NeoHookeRingEnergyMomentum) {
+  const auto s = spinning_ring(MaterialModel::NeoHooke, 64, 5.0);
+  const FlightFigures em = fly(*s, "em", 0.03, 1000);
+  report("EM, Neo-Hooke, dt 0.03", em);
+  ASSERT_FALSE(em.failed);
+  EXPECT_LE(em.energy_err, 1e-9);
+  EXPECT_LE(em.linear_err, 1e-11);
+  EXPECT_LE(em.angular_err, 1e-11);
+  EXPECT_LE(em.max_iterations, 6);
+}
+
+// Order of accuracy: a coarse ring (16 x 1) spinning at omega = 2 and
+// translating, t_end = 0.4, four steps dt = 0.01 ... 0.00125 against a reference
+// with dt = 0.00125 / 8; error = max |q - q_ref| at t_end. Both schemes are
+// second order: each observed order log2(e(dt) / e(dt/2)) within 2 +- 0.15.
+// (At dt = 0.02 the wall's oscillations are not resolved yet: observed order
+// 1.75 from 0.02 to 0.01.)
+TEST(Convergence, SecondOrderInTime) {
+  const auto s = spinning_ring(MaterialModel::SaintVenantKirchhoff, 16, 2.0);
+  const double t_end = 0.4;
+  for (const std::string scheme : {"em", "midpoint"}) {
+    const FlightFigures ref = fly(*s, scheme, 0.00125 / 8, 8 * 320, 1e-12);
+    ASSERT_FALSE(ref.failed);
+    std::vector<double> err;
+    for (double dt = 0.01; dt > 0.001; dt /= 2) {
+      const FlightFigures r = fly(*s, scheme, dt, std::lround(t_end / dt), 1e-12);
+      ASSERT_FALSE(r.failed) << scheme << " dt " << dt;
+      err.push_back((r.q - ref.q).cwiseAbs().maxCoeff());
+    }
+    std::printf("  %-8s errors", scheme.c_str());
+    for (double e : err) std::printf(" %.3e", e);
+    std::printf("  orders");
+    for (std::size_t k = 1; k < err.size(); ++k)
+      std::printf(" %.3f", std::log2(err[k - 1] / err[k]));
+    std::printf("\n");
+    for (std::size_t k = 1; k < err.size(); ++k)
+      EXPECT_NEAR(std::log2(err[k - 1] / err[k]), 2.0, 0.15) << scheme << " refinement " << k;
+  }
+}
+
+}  // namespace
+}  // namespace emdae
