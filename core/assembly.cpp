@@ -2,6 +2,11 @@
 
 namespace emdae {
 
+Assembler::Assembler(const System& system, const std::vector<const Term*>& extra) : s_(system) {
+  for (const auto& c : s_.constraints()) constraints_.push_back(c.get());
+  constraints_.insert(constraints_.end(), extra.begin(), extra.end());
+}
+
 void Assembler::local(const Term& term, GradientKind kind, const Vec& q0, const Vec& q1,
                       double t0, double t1, Mat* jac) {
   gather(term, q0, ql0_);
@@ -34,9 +39,9 @@ void Assembler::add_constraint_forces(GradientKind kind, const Vec& q0, const Ve
                                       Triplets* jac, long lambda_col, long phi_row,
                                       double jac_factor) {
   const auto& fixed = s_.is_prescribed();
-  if (phi) phi->resize(s_.n_constraints());
-  for (int l = 0; l < s_.n_constraints(); ++l) {
-    const Term& c = *s_.constraints()[static_cast<std::size_t>(l)];
+  if (phi) phi->resize(n_constraints());
+  for (int l = 0; l < n_constraints(); ++l) {
+    const Term& c = constraint(l);
     local(c, kind, q0, q1, t0, t1, jac ? &jac_ : nullptr);
     const auto& dofs = c.dofs();
     for (std::size_t i = 0; i < dofs.size(); ++i)
@@ -55,9 +60,9 @@ void Assembler::add_constraint_forces(GradientKind kind, const Vec& q0, const Ve
 }
 
 void Assembler::constraint_values(const Vec& q, double t, Vec& phi) {
-  phi.resize(s_.n_constraints());
-  for (int l = 0; l < s_.n_constraints(); ++l) {
-    const Term& c = *s_.constraints()[static_cast<std::size_t>(l)];
+  phi.resize(n_constraints());
+  for (int l = 0; l < n_constraints(); ++l) {
+    const Term& c = constraint(l);
     gather(c, q, ql1_);
     phi[l] = c.value(ql1_, t);
   }
@@ -65,8 +70,8 @@ void Assembler::constraint_values(const Vec& q, double t, Vec& phi) {
 
 void Assembler::add_constraint_jacobian(const Vec& q, double t, Triplets& out, long row_offset,
                                         long col_offset, double factor) {
-  for (int l = 0; l < s_.n_constraints(); ++l) {
-    const Term& c = *s_.constraints()[static_cast<std::size_t>(l)];
+  for (int l = 0; l < n_constraints(); ++l) {
+    const Term& c = constraint(l);
     local(c, GradientKind::Exact, q, q, t, t, nullptr);
     const auto& dofs = c.dofs();
     for (std::size_t i = 0; i < dofs.size(); ++i)

@@ -13,11 +13,14 @@
 
 namespace emdae {
 
-using Triplets = std::vector<Eigen::Triplet<double, long>>;
-
 class Assembler {
  public:
-  explicit Assembler(const System& system) : s_(system) {}
+  /// The constraints assembled are the system's own, followed by `extra`
+  /// (the active unilateral constraints of a step).
+  explicit Assembler(const System& system, const std::vector<const Term*>& extra = {});
+
+  int n_constraints() const { return static_cast<int>(constraints_.size()); }
+  const Term& constraint(int l) const { return *constraints_[static_cast<std::size_t>(l)]; }
 
   /// f += sum over potential terms of G(q0, q1); with `jac`, adds
   /// jac_factor * dG/dq1 (free rows only).
@@ -49,6 +52,7 @@ class Assembler {
   void scatter_matrix(const Term& term, const Mat& k, double factor, Triplets& out) const;
 
   const System& s_;
+  std::vector<const Term*> constraints_;
   Vec ql0_, ql1_, grad_;
   Mat jac_;
   TermWorkspace ws_;

@@ -37,6 +37,45 @@ void System::add_mass(int a, int b, double m) {
 void System::add_potential(std::unique_ptr<Term> term) { potentials_.push_back(std::move(term)); }
 void System::add_constraint(std::unique_ptr<Term> term) { constraints_.push_back(std::move(term)); }
 
+void System::add_unilateral(std::unique_ptr<UnilateralConstraints> set) {
+  unilateral_.push_back(std::move(set));
+}
+
+void System::add_load_forces(const Vec& q, double t, Vec& f, Triplets* jac, double jac_factor) const {
+  for (const auto& load : loads_) load->add_force(q, t, f, jac, jac_factor, is_prescribed_);
+}
+
+int System::n_unilateral() const {
+  int n = 0;
+  for (const auto& u : unilateral_) n += u->size();
+  return n;
+}
+
+std::pair<int, int> System::unilateral_candidate(int id) const {
+  for (std::size_t k = 0; k < unilateral_.size(); ++k) {
+    if (id < unilateral_[k]->size()) return {static_cast<int>(k), id};
+    id -= unilateral_[k]->size();
+  }
+  throw std::out_of_range("no unilateral candidate " + std::to_string(id));
+}
+
+const Term* System::unilateral_term(int id) const {
+  const auto [set, i] = unilateral_candidate(id);
+  return unilateral_[static_cast<std::size_t>(set)]->term(i);
+}
+
+double System::unilateral_gap(int id, const Vec& q) const {
+  const auto [set, i] = unilateral_candidate(id);
+  return unilateral_[static_cast<std::size_t>(set)]->gap(i, q);
+}
+
+std::unique_ptr<Term> System::pop_constraint() {
+  if (constraints_.empty()) throw std::logic_error("System::pop_constraint: no constraint");
+  std::unique_ptr<Term> t = std::move(constraints_.back());
+  constraints_.pop_back();
+  return t;
+}
+
 void System::prescribe(PrescribedDof p) {
   if (p.dof < 0 || p.dof >= n_dofs())
     throw std::invalid_argument("System::prescribe: no dof " + std::to_string(p.dof));

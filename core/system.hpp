@@ -14,9 +14,12 @@
 #include <functional>
 #include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
+#include "core/load.hpp"
 #include "core/term.hpp"
+#include "core/unilateral.hpp"
 
 namespace emdae {
 
@@ -47,7 +50,28 @@ class System {
 
   void add_potential(std::unique_ptr<Term> term);
   void add_constraint(std::unique_ptr<Term> term);
+  /// Removes and returns the constraint added last (temporary constraints,
+  /// e.g. a rotation held during a static solve).
+  std::unique_ptr<Term> pop_constraint();
   void prescribe(PrescribedDof p);
+  /// Adds an external (non-potential) load, applied at the step midpoint.
+  void add_load(std::unique_ptr<Load> load) { loads_.push_back(std::move(load)); }
+  const std::vector<std::unique_ptr<Load>>& loads() const { return loads_; }
+  /// f += sum of the loads at (q, t); jac += factor * their derivative.
+  void add_load_forces(const Vec& q, double t, Vec& f, Triplets* jac = nullptr,
+                       double jac_factor = 1.0) const;
+  /// Adds a set of unilateral constraints (contact); its candidates are
+  /// numbered after those of the sets added before it.
+  void add_unilateral(std::unique_ptr<UnilateralConstraints> set);
+  const std::vector<std::unique_ptr<UnilateralConstraints>>& unilateral() const { return unilateral_; }
+  /// Total number of unilateral candidates over all sets.
+  int n_unilateral() const;
+  /// Candidate `id` (global numbering) as (set, index in set).
+  std::pair<int, int> unilateral_candidate(int id) const;
+  /// Its function for the prepared step, or nullptr.
+  const Term* unilateral_term(int id) const;
+  /// Its gap at q, +infinity when not engaged (UnilateralConstraints::gap).
+  double unilateral_gap(int id, const Vec& q) const;
   void fix_node(int node);
 
   const std::vector<std::unique_ptr<Term>>& potentials() const { return potentials_; }
@@ -67,7 +91,8 @@ class System {
   void set_initial_velocity(int node, const Vec& velocity);
 
   /// Translation and rotation symmetry of the whole system: those of all its
-  /// terms, and none of them if a dof is prescribed.
+  /// terms, and none of them if a dof is prescribed. (Loads are accounted for
+  /// separately, through their work and moment.)
   Symmetry symmetry() const;
 
   /// Throws std::invalid_argument when the system cannot be integrated
@@ -82,6 +107,8 @@ class System {
   std::vector<std::unique_ptr<Term>> constraints_;
   std::vector<PrescribedDof> prescribed_;
   std::vector<bool> is_prescribed_;
+  std::vector<std::unique_ptr<UnilateralConstraints>> unilateral_;
+  std::vector<std::unique_ptr<Load>> loads_;
   mutable SparseMatrix mass_;
   mutable Vec lumped_;
   mutable bool assembled_ = false;

@@ -10,8 +10,8 @@ namespace emdae {
 
 class EnergyMomentumStepper final : public MidpointFamilyStepper {
  public:
-  EnergyMomentumStepper(const System& system, NewtonSettings newton)
-      : MidpointFamilyStepper(system, GradientKind::Discrete, newton) {}
+  EnergyMomentumStepper(const System& system, NewtonSettings newton, SchemeSettings scheme = {})
+      : MidpointFamilyStepper(system, GradientKind::Discrete, newton, scheme) {}
   std::string name() const override { return "em"; }
 };
 

@@ -11,8 +11,8 @@ namespace emdae {
 
 class ImplicitMidpointStepper final : public MidpointFamilyStepper {
  public:
-  ImplicitMidpointStepper(const System& system, NewtonSettings newton)
-      : MidpointFamilyStepper(system, GradientKind::Midpoint, newton) {}
+  ImplicitMidpointStepper(const System& system, NewtonSettings newton, SchemeSettings scheme = {})
+      : MidpointFamilyStepper(system, GradientKind::Midpoint, newton, scheme) {}
   std::string name() const override { return "midpoint"; }
 };
 

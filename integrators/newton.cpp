@@ -7,6 +7,7 @@
 #include <sunmatrix/sunmatrix_sparse.h>
 
 #include <algorithm>
+#include <cstdlib>
 #include <cstring>
 #include <exception>
 #include <stdexcept>
@@ -81,6 +82,10 @@ struct NewtonSolver::Impl {
     N_VConst(1.0, uscale);
     jmat = check_ptr(SUNSparseMatrix(n, n, std::max(1, n), CSC_MAT, ctx), "SUNSparseMatrix");
     ls = check_ptr(SUNLinSol_KLU(u, jmat, ctx), "SUNLinSol_KLU");
+    // AMD: our Jacobians are structurally symmetric (FE stiffness, constraint
+    // blocks G and G^T), where AMD orders with far less fill than KLU's
+    // default COLAMD (measured on the bearing: 81 -> see docs/performance.md).
+    check(SUNLinSol_KLUSetOrdering(ls, 0), "SUNLinSol_KLUSetOrdering");
     kin = check_ptr(KINCreate(ctx), "KINCreate");
     check(KINInit(kin, &Impl::residual_cb, u), "KINInit");
     check(KINSetUserData(kin, this), "KINSetUserData");
@@ -96,7 +101,9 @@ struct NewtonSolver::Impl {
     check(KINSetScaledStepTol(kin, kRoundOffStep), "KINSetScaledStepTol");
     check(KINSetMaxNewtonStep(kin, 1e100), "KINSetMaxNewtonStep");
     check(KINSetErrHandlerFn(kin, &Impl::error_cb, this), "KINSetErrHandlerFn");
-    check(KINSetPrintLevel(kin, 0), "KINSetPrintLevel");
+    // EMDAE_KINSOL_PRINT=1|2|3 shows KINSOL's own iteration log (on stdout).
+    const char* print = std::getenv("EMDAE_KINSOL_PRINT");
+    check(KINSetPrintLevel(kin, print ? std::atoi(print) : 0), "KINSetPrintLevel");
   }
 
   static void error_cb(int, const char* module, const char* function, char* msg, void* data) {

@@ -22,9 +22,9 @@ State initial_state(const System& system) {
 std::vector<std::string> known_schemes() { return {"em", "midpoint"}; }
 
 std::unique_ptr<Stepper> make_stepper(const std::string& name, const System& system,
-                                      const NewtonSettings& newton) {
-  if (name == "em") return std::make_unique<EnergyMomentumStepper>(system, newton);
-  if (name == "midpoint") return std::make_unique<ImplicitMidpointStepper>(system, newton);
+                                      const NewtonSettings& newton, const SchemeSettings& scheme) {
+  if (name == "em") return std::make_unique<EnergyMomentumStepper>(system, newton, scheme);
+  if (name == "midpoint") return std::make_unique<ImplicitMidpointStepper>(system, newton, scheme);
   std::string known;
   for (const auto& k : known_schemes()) known += (known.empty() ? "" : ", ") + k;
   throw std::invalid_argument("unknown scheme '" + name + "' (known: " + known + ")");

@@ -21,7 +21,12 @@ namespace emdae {
 
 struct State {
   double t = 0.0;
-  Vec q, v, lambda;
+  Vec q, v;
+  /// Multipliers: the system's own constraints, then one per active
+  /// unilateral candidate, in the order of `active`.
+  Vec lambda;
+  /// Active unilateral candidates (global ids, see System::unilateral_candidate).
+  std::vector<int> active;
 };
 
 /// The initial state of a system: its initial positions and velocities, with
@@ -33,6 +38,13 @@ struct StepStats {
   int iterations = 0;
   double residual = 0.0;
   std::string message;
+  int contact_events = 0;  // impacts located (sub-steps) and releases within the step
+  double external_work = 0.0;  // work of the loads over the step
+  // Impulse of the loads and of the supports (prescribed dofs) over the
+  // step, and their moments about the origin (2D: one component): the
+  // momentum balance p_{n+1} - p_n = impulses, which the energy-momentum and
+  // midpoint schemes satisfy exactly, is checked with these.
+  Vec external_impulse, external_angular_impulse;
 };
 
 class Stepper {
@@ -45,9 +57,26 @@ class Stepper {
 /// Names accepted by make_stepper, in the order shown to users.
 std::vector<std::string> known_schemes();
 
+/// Settings of the schemes that have their own: IDA's local error tolerances
+/// (on q and v), generalized-alpha's spectral radius at infinity.
+struct SchemeSettings {
+  double rtol = 1e-8, atol = 1e-8;  // "ida"
+  double rho_inf = 1.0;             // "galpha", in [0, 1]
+  // Contact ("em", "midpoint"): locate each impact and end a sub-step there
+  // so that a node enters contact with a closed gap (energy treatment), and
+  // the gap below which an inactive candidate counts as touching (0: 10
+  // times the Newton tolerance).
+  bool locate_impacts = true;
+  double gap_tolerance = 0.0;
+  // Scale residuals by the Newton matrix's diagonal (statics) instead of the
+  // inertial dt^2 / (2 m_i) (dynamics); see midpoint_family.hpp.
+  bool stiffness_scaled_residual = false;
+};
+
 /// Builds the stepper called `name` for `system`; throws std::invalid_argument
 /// naming the known schemes when `name` is not one of them.
 std::unique_ptr<Stepper> make_stepper(const std::string& name, const System& system,
-                                      const NewtonSettings& newton);
+                                      const NewtonSettings& newton,
+                                      const SchemeSettings& scheme = {});
 
 }  // namespace emdae

@@ -1,0 +1,91 @@
+// Second-order forward automatic differentiation for small functions of a
+// few variables: a Jet carries a value, its gradient and its Hessian.
+//
+// The mortar gap of a segment pair (mortar.cpp) is a rational, piecewise
+// defined function of five invariants; writing it once as a template and
+// evaluating it on Jets gives f~, grad f~ and the Hessian needed by the
+// discrete gradient and by Newton without a hand-derived formula for each of
+// its segmentation cases. Branches (max, min, comparisons) follow the values,
+// as for the plain function.
+#pragma once
+
+#include <Eigen/Dense>
+#include <cmath>
+
+namespace emdae {
+
+template <int N>
+struct Jet {
+  using V = Eigen::Matrix<double, N, 1>;
+  using M = Eigen::Matrix<double, N, N>;
+  double v = 0.0;
+  V g = V::Zero();
+  M h = M::Zero();
+
+  Jet() = default;
+  Jet(double value) : v(value) {}  // NOLINT: constants convert implicitly
+  static Jet variable(double value, int i) {
+    Jet j(value);
+    j.g[i] = 1.0;
+    return j;
+  }
+};
+
+template <int N>
+Jet<N> operator+(const Jet<N>& a, const Jet<N>& b) {
+  Jet<N> r;
+  r.v = a.v + b.v;
+  r.g = a.g + b.g;
+  r.h = a.h + b.h;
+  return r;
+}
+template <int N>
+Jet<N> operator-(const Jet<N>& a, const Jet<N>& b) {
+  Jet<N> r;
+  r.v = a.v - b.v;
+  r.g = a.g - b.g;
+  r.h = a.h - b.h;
+  return r;
+}
+template <int N>
+Jet<N> operator*(const Jet<N>& a, const Jet<N>& b) {
+  Jet<N> r;
+  r.v = a.v * b.v;
+  r.g = a.v * b.g + b.v * a.g;
+  r.h = a.v * b.h + b.v * a.h + a.g * b.g.transpose() + b.g * a.g.transpose();
+  return r;
+}
+template <int N>
+Jet<N> operator/(const Jet<N>& a, const Jet<N>& b) {
+  // a / b = a * (1/b); d(1/b) = -db/b^2, d2(1/b) = 2 db db^T / b^3 - d2b / b^2
+  Jet<N> inv;
+  const double ib = 1.0 / b.v;
+  inv.v = ib;
+  inv.g = -ib * ib * b.g;
+  inv.h = 2 * ib * ib * ib * (b.g * b.g.transpose()) - ib * ib * b.h;
+  return a * inv;
+}
+template <int N>
+Jet<N> operator+(const Jet<N>& a, double b) { return a + Jet<N>(b); }
+template <int N>
+Jet<N> operator-(double a, const Jet<N>& b) { return Jet<N>(a) - b; }
+template <int N>
+Jet<N> operator*(double a, const Jet<N>& b) {
+  Jet<N> r = b;
+  r.v *= a;
+  r.g *= a;
+  r.h *= a;
+  return r;
+}
+
+inline double value_of(double x) { return x; }
+template <int N>
+double value_of(const Jet<N>& x) { return x.v; }
+
+/// max and min that follow the values (the branch taken is differentiated).
+template <class T>
+T max_of(const T& a, const T& b) { return value_of(a) >= value_of(b) ? a : b; }
+template <class T>
+T min_of(const T& a, const T& b) { return value_of(a) <= value_of(b) ? a : b; }
+
+}  // namespace emdae

@@ -1,0 +1,158 @@
+#include "contact/mortar.hpp"
+
+#include <cmath>
+#include <stdexcept>
+
+#include "contact/jet.hpp"
+
+namespace emdae {
+
+template <class T>
+T mortar_pair_gap(const T pi[5], int a) {
+  const T& p1 = pi[0];
+  const T& p2 = pi[1];
+  const T& p3 = pi[2];
+  const T& p4 = pi[3];
+  const T& p5 = pi[4];
+  // A master segment facing the slave runs against it: pi3 < pi2.
+  if (!(value_of(p3) < value_of(p2)) || !(value_of(p1) > 0.0)) return T(0.0);
+  const T sa = max_of(T(0.0), p3);
+  const T sb = min_of(p1, p2);
+  if (!(value_of(sb) > value_of(sa))) return T(0.0);
+  const T slope = (p5 - p4) / (p3 - p2);
+  const T half = 0.5 * (sb - sa);
+  const T mid = 0.5 * (sa + sb);
+  const double gauss = 1.0 / std::sqrt(3.0);
+  T sum(0.0);
+  for (double xi : {-gauss, gauss}) {
+    const T s = mid + xi * half;
+    const T gap_times_len = p4 + slope * (s - p2);
+    const T n = a == 0 ? 1.0 - s / p1 : s / p1;
+    sum = sum + n * gap_times_len;
+  }
+  return sum * half / p1;
+}
+
+template double mortar_pair_gap<double>(const double pi[5], int a);
+template Jet<5> mortar_pair_gap<Jet<5>>(const Jet<5> pi[5], int a);
+
+namespace {
+
+// The five invariants as quadratic forms pi_k = 1/2 x^T A_k x of the block's
+// x = (x1s, x2s, x1m, x2m): the same constant matrices for every pair.
+struct PairForms {
+  std::array<Eigen::Matrix<double, 8, 8>, 5> a;
+  PairForms() {
+    using P = Eigen::Matrix<double, 2, 8>;
+    const Eigen::Matrix2d i2 = Eigen::Matrix2d::Identity();
+    P pa = P::Zero(), p1 = P::Zero(), p2 = P::Zero();
+    pa.block<2, 2>(0, 0) = -i2, pa.block<2, 2>(0, 2) = i2;  // a  = x2s - x1s
+    p1.block<2, 2>(0, 0) = -i2, p1.block<2, 2>(0, 4) = i2;  // e1 = x1m - x1s
+    p2.block<2, 2>(0, 0) = -i2, p2.block<2, 2>(0, 6) = i2;  // e2 = x2m - x1s
+    Eigen::Matrix2d cross;  // u x v = u^T J v
+    cross << 0, 1, -1, 0;
+    auto sym = [](const P& b, const Eigen::Matrix2d& m, const P& c) -> Eigen::Matrix<double, 8, 8> {
+      // pi = (b x)^T m (c x)  =>  A = b^T m c + c^T m^T b
+      return b.transpose() * m * c + c.transpose() * m.transpose() * b;
+    };
+    a[0] = sym(pa, i2, pa);
+    a[1] = sym(pa, i2, p1);
+    a[2] = sym(pa, i2, p2);
+    a[3] = sym(p1, cross, pa);
+    a[4] = sym(p2, cross, pa);
+  }
+};
+
+const PairForms& forms() {
+  static const PairForms f;
+  return f;
+}
+
+std::vector<int> node_dofs(const std::vector<int>& nodes) {
+  std::vector<int> d;
+  for (int n : nodes) d.push_back(2 * n), d.push_back(2 * n + 1);
+  return d;
+}
+
+}  // namespace
+
+MortarGapTerm::MortarGapTerm(const std::vector<int>& nodes, std::vector<MortarPair> pairs,
+                             double weight, std::string name)
+    : Term(node_dofs(nodes), 5 * static_cast<int>(pairs.size()), 5), pairs_(std::move(pairs)),
+      weight_(weight), name_(std::move(name)) {
+  if (!(weight_ > 0)) throw std::invalid_argument(name_ + ": mortar weight must be positive");
+}
+
+void MortarGapTerm::invariants(const Vec& q, Vec& pi) const {
+  pi.resize(n_invariants());
+  Eigen::Matrix<double, 8, 1> x;
+  for (std::size_t b = 0; b < pairs_.size(); ++b) {
+    for (int k = 0; k < 4; ++k) x.segment<2>(2 * k) = q.segment<2>(dof(pairs_[b].local_nodes[static_cast<std::size_t>(k)], 0));
+    for (int k = 0; k < 5; ++k)
+      pi[static_cast<Eigen::Index>(5 * b) + k] = 0.5 * x.dot(forms().a[static_cast<std::size_t>(k)] * x);
+  }
+}
+
+void MortarGapTerm::invariant_jacobian(const Vec& q, Mat& dpi) const {
+  dpi.setZero(n_invariants(), n_local());
+  Eigen::Matrix<double, 8, 1> x;
+  for (std::size_t b = 0; b < pairs_.size(); ++b) {
+    const auto& ln = pairs_[b].local_nodes;
+    for (int k = 0; k < 4; ++k) x.segment<2>(2 * k) = q.segment<2>(dof(ln[static_cast<std::size_t>(k)], 0));
+    for (int k = 0; k < 5; ++k) {
+      const Eigen::Matrix<double, 8, 1> row = forms().a[static_cast<std::size_t>(k)] * x;
+      for (int j = 0; j < 4; ++j)
+        for (int c = 0; c < 2; ++c)
+          dpi(static_cast<Eigen::Index>(5 * b) + k, dof(ln[static_cast<std::size_t>(j)], c)) += row[2 * j + c];
+    }
+  }
+}
+
+void MortarGapTerm::add_invariant_hessians(const Vec& w, Mat& kmat) const {
+  for (std::size_t b = 0; b < pairs_.size(); ++b) {
+    Eigen::Matrix<double, 8, 8> sum = Eigen::Matrix<double, 8, 8>::Zero();
+    for (int k = 0; k < 5; ++k) sum += w[static_cast<Eigen::Index>(5 * b) + k] * forms().a[static_cast<std::size_t>(k)];
+    const auto& ln = pairs_[b].local_nodes;
+    for (int i = 0; i < 4; ++i)
+      for (int j = 0; j < 4; ++j)
+        for (int ci = 0; ci < 2; ++ci)
+          for (int cj = 0; cj < 2; ++cj)
+            kmat(dof(ln[static_cast<std::size_t>(i)], ci), dof(ln[static_cast<std::size_t>(j)], cj)) +=
+                sum(2 * i + ci, 2 * j + cj);
+  }
+}
+
+double MortarGapTerm::block_value(int block, const VecRef& pi, double) const {
+  const double p[5] = {pi[0], pi[1], pi[2], pi[3], pi[4]};
+  return mortar_pair_gap(p, pairs_[static_cast<std::size_t>(block)].slave_node) / weight_;
+}
+
+void MortarGapTerm::block_gradient(int block, const VecRef& pi, double, Eigen::Ref<Vec> g) const {
+  Jet<5> p[5];
+  for (int k = 0; k < 5; ++k) p[k] = Jet<5>::variable(pi[k], k);
+  const Jet<5> f = mortar_pair_gap(p, pairs_[static_cast<std::size_t>(block)].slave_node);
+  g = f.g / weight_;
+}
+
+void MortarGapTerm::block_hessian(int block, const VecRef& pi, double, Eigen::Ref<Mat> h) const {
+  Jet<5> p[5];
+  for (int k = 0; k < 5; ++k) p[k] = Jet<5>::variable(pi[k], k);
+  const Jet<5> f = mortar_pair_gap(p, pairs_[static_cast<std::size_t>(block)].slave_node);
+  h = f.h / weight_;
+}
+
+double MortarGapTerm::coverage(const Vec& q) const {
+  Vec pi;
+  invariants(q, pi);
+  double c = 0.0;
+  for (std::size_t b = 0; b < pairs_.size(); ++b) {
+    const double p1 = pi[static_cast<Eigen::Index>(5 * b)], p2 = pi[static_cast<Eigen::Index>(5 * b) + 1],
+                 p3 = pi[static_cast<Eigen::Index>(5 * b) + 2];
+    if (!(p3 < p2) || !(p1 > 0)) continue;
+    c += std::max(0.0, std::min(p1, p2) - std::max(0.0, p3)) / p1;
+  }
+  // A node has two slave segments (one at a surface's end): full coverage 2.
+  return c;
+}
+
+}  // namespace emdae

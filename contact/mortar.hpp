@@ -1,0 +1,89 @@
+// The mortar weighted gap of one slave node, written in invariants (paper §4).
+//
+// For a slave segment (x1s, x2s) (body on its left, outward normal the edge
+// turned clockwise) and a master segment (x1m, x2m), with a = x2s - x1s,
+// e1 = x1m - x1s, e2 = x2m - x1s, five quadratic invariants describe the pair:
+//
+//   pi1 = a.a,  pi2 = a.e1,  pi3 = a.e2,  pi4 = e1 x a,  pi5 = e2 x a
+//
+// (pi1..pi3 are the paper's eq. (63); pi4, pi5 are linear combinations of its
+// eqs. (69)-(70): pi4_paper = -(pi4 + pi5), pi5_paper = pi5 - pi4).
+// Along the slave segment the tangential coordinate s = a.(x - x1s) runs over
+// [0, pi1]; the master nodes project (along the slave normal, paper eqs.
+// (58)-(61)) to s = pi2 and s = pi3, and a master segment facing the slave
+// runs backwards, pi3 < pi2. The mortar segment is the overlap
+// [s_a, s_b] = [max(0, pi3), min(pi1, pi2)], and on it
+//
+//   (x_master(s) - x1s) x a = pi4 + (pi5 - pi4) (s - pi2) / (pi3 - pi2)
+//
+// is the gap times |a|. The contribution of the pair to the weighted gap of
+// slave node A (paper eq. (53) with (54)-(55)) is then
+//
+//   g_A = 1/pi1 int_{s_a}^{s_b} N_A(s) (x_master(s) - x1s) x a ds,
+//   N_1 = 1 - s/pi1,  N_2 = s/pi1,
+//
+// integrated exactly by 2-point Gauss on the mortar segment (the integrand is
+// quadratic in s). |a| cancels, so g_A is a rational function of the
+// invariants (paper eqs. (71)-(72)) and the generic discrete gradient applies.
+//
+// Unlike the paper, the segmentation (which of 0, pi1, pi2, pi3 bound the
+// mortar segment) is not frozen: max/min are part of the function. The
+// discrete gradient's energy identity needs no smoothness, so a segmentation
+// that changes within a step costs no energy, and the function the next step
+// starts from is the one this step ended with.
+#pragma once
+
+#include <array>
+#include <string>
+#include <vector>
+
+#include "core/term.hpp"
+
+namespace emdae {
+
+/// Contribution of a segment pair to the weighted gap of slave node `a` (0:
+/// the segment's first node, 1: its second), as a function of pi1..pi5.
+/// Zero when the master segment does not face the slave or does not overlap.
+template <class T>
+T mortar_pair_gap(const T pi[5], int a);
+
+/// One segment pair of a slave node's gap: positions in the term's local
+/// node list of x1s, x2s, x1m, x2m, and which slave node the term is for.
+struct MortarPair {
+  std::array<int, 4> local_nodes;
+  int slave_node = 0;  // 0 or 1
+};
+
+/// The normalized weighted gap Phi_A = g_A / w_A of one slave node A, summed
+/// over its segment pairs, w_A the node's mortar weight (int N_A) in the
+/// reference configuration, so that Phi_A has units of length. One block of
+/// five invariants per pair.
+class MortarGapTerm final : public Term {
+ public:
+  /// @param nodes  global node indices of the term's local nodes (2D).
+  MortarGapTerm(const std::vector<int>& nodes, std::vector<MortarPair> pairs, double weight,
+                std::string name);
+
+  void invariants(const Vec& q, Vec& pi) const override;
+  void invariant_jacobian(const Vec& q, Mat& dpi) const override;
+  void add_invariant_hessians(const Vec& w, Mat& k) const override;
+
+  double block_value(int block, const VecRef& pi, double t) const override;
+  void block_gradient(int block, const VecRef& pi, double t, Eigen::Ref<Vec> g) const override;
+  void block_hessian(int block, const VecRef& pi, double t, Eigen::Ref<Mat> h) const override;
+  std::string describe() const override { return name_; }
+
+  /// Fraction of the node's segments covered by mortar segments at q (local):
+  /// 0 when no master segment overlaps any more.
+  double coverage(const Vec& q) const;
+  double weight() const { return weight_; }
+
+ private:
+  // Local dof of component c of local node n.
+  int dof(int n, int c) const { return 2 * n + c; }
+  std::vector<MortarPair> pairs_;
+  double weight_;
+  std::string name_;
+};
+
+}  // namespace emdae

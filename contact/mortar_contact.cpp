@@ -1,0 +1,124 @@
+#include "contact/mortar_contact.hpp"
+
+#include "core/gradient.hpp"
+
+#include <algorithm>
+#include <limits>
+#include <map>
+#include <stdexcept>
+
+namespace emdae {
+
+namespace {
+
+Eigen::Vector2d node_position(const Vec& q, int node) { return q.segment<2>(2 * node); }
+
+}  // namespace
+
+MortarContact::MortarContact(const System& system, ContactSurface slave, ContactSurface master,
+                             std::string name, ContactOptions options)
+    : name_(std::move(name)), slave_(std::move(slave)), master_(std::move(master)), options_(options) {
+  if (system.dim() != 2) throw std::invalid_argument(name_ + ": mortar contact is planar (2D)");
+  if (slave_.edges.empty() || master_.edges.empty())
+    throw std::invalid_argument(name_ + ": slave and master surfaces need at least one segment");
+  std::map<int, int> index;
+  const Vec& x0 = system.initial_positions();
+  for (std::size_t e = 0; e < slave_.edges.size(); ++e)
+    for (int k = 0; k < 2; ++k) {
+      const int node = slave_.edges[e][static_cast<std::size_t>(k)];
+      if (node < 0 || node >= system.n_nodes())
+        throw std::invalid_argument(name_ + ": slave surface refers to missing node " + std::to_string(node));
+      auto [it, inserted] = index.emplace(node, static_cast<int>(slave_nodes_.size()));
+      if (inserted) {
+        slave_nodes_.push_back(node);
+        node_edges_.push_back({-1, -1});
+        weights_.push_back(0.0);
+      }
+      node_edges_[static_cast<std::size_t>(it->second)][static_cast<std::size_t>(k)] = static_cast<int>(e);
+      const double len = (node_position(x0, slave_.edges[e][1]) - node_position(x0, slave_.edges[e][0])).norm();
+      weights_[static_cast<std::size_t>(it->second)] += 0.5 * len;
+    }
+  for (const auto& e : master_.edges) {
+    for (int node : e)
+      if (node < 0 || node >= system.n_nodes())
+        throw std::invalid_argument(name_ + ": master surface refers to missing node " + std::to_string(node));
+    mean_master_length_ += (node_position(x0, e[1]) - node_position(x0, e[0])).norm();
+  }
+  mean_master_length_ /= static_cast<double>(master_.edges.size());
+  terms_.resize(slave_nodes_.size());
+}
+
+std::string MortarContact::describe(int i) const {
+  return "slave node " + std::to_string(slave_node(i)) + " of contact '" + name_ + "'";
+}
+
+double MortarContact::gap(int i, const Vec& q) const {
+  const MortarGapTerm* t = terms_[static_cast<std::size_t>(i)].get();
+  if (!t) return std::numeric_limits<double>::infinity();
+  Vec local;
+  gather(*t, q, local);
+  if (t->coverage(local) < kMinCoverage) return std::numeric_limits<double>::infinity();
+  return t->value(local, 0.0);
+}
+
+void MortarContact::prepare(const Vec& q, const Vec& v, double dt) {
+  // How far the surfaces can close within the step, plus a margin.
+  double vmax = 0.0;
+  for (const auto* s : {&slave_, &master_})
+    for (const auto& e : s->edges)
+      for (int node : e) vmax = std::max(vmax, v.segment<2>(2 * node).norm());
+  const double margin = options_.search_margin * mean_master_length_ + 2.0 * vmax * dt;
+
+  auto box = [&](const std::array<int, 2>& e) {
+    const Eigen::Vector2d a = node_position(q, e[0]), b = node_position(q, e[1]);
+    const Eigen::Vector2d half = Eigen::Vector2d::Constant(0.5 * margin);
+    return Box{a.cwiseMin(b) - half, a.cwiseMax(b) + half};
+  };
+  std::vector<Box> master_boxes;
+  master_boxes.reserve(master_.edges.size());
+  for (const auto& e : master_.edges) master_boxes.push_back(box(e));
+  grid_.build(master_boxes, std::max(mean_master_length_, margin));
+
+  // Candidate master segments of every slave segment: boxes overlap and the
+  // segments face each other (tangents opposed).
+  std::vector<std::vector<int>> candidates(slave_.edges.size());
+  for (std::size_t e = 0; e < slave_.edges.size(); ++e) {
+    grid_.query(box(slave_.edges[e]), candidates[e]);
+    const Eigen::Vector2d as = node_position(q, slave_.edges[e][1]) - node_position(q, slave_.edges[e][0]);
+    auto& c = candidates[e];
+    c.erase(std::remove_if(c.begin(), c.end(),
+                           [&](int m) {
+                             const auto& me = master_.edges[static_cast<std::size_t>(m)];
+                             const Eigen::Vector2d am = node_position(q, me[1]) - node_position(q, me[0]);
+                             return as.dot(am) >= 0.0;
+                           }),
+            c.end());
+  }
+
+  n_pairs_ = 0;
+  for (std::size_t i = 0; i < slave_nodes_.size(); ++i) {
+    std::vector<int> nodes;
+    auto local = [&](int node) {
+      auto it = std::find(nodes.begin(), nodes.end(), node);
+      if (it != nodes.end()) return static_cast<int>(it - nodes.begin());
+      nodes.push_back(node);
+      return static_cast<int>(nodes.size()) - 1;
+    };
+    std::vector<MortarPair> pairs;
+    for (int k = 0; k < 2; ++k) {
+      const int e = node_edges_[i][static_cast<std::size_t>(k)];
+      if (e < 0) continue;
+      const auto& se = slave_.edges[static_cast<std::size_t>(e)];
+      for (int m : candidates[static_cast<std::size_t>(e)]) {
+        const auto& me = master_.edges[static_cast<std::size_t>(m)];
+        pairs.push_back(MortarPair{{local(se[0]), local(se[1]), local(me[0]), local(me[1])}, k});
+      }
+    }
+    n_pairs_ += static_cast<long>(pairs.size());
+    terms_[i] = pairs.empty() ? nullptr
+                              : std::make_unique<MortarGapTerm>(nodes, std::move(pairs), weights_[i],
+                                                                describe(static_cast<int>(i)));
+  }
+}
+
+}  // namespace emdae

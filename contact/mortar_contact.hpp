@@ -1,0 +1,66 @@
+// Two-body frictionless mortar contact as a set of unilateral constraints:
+// one candidate per slave node, its function the normalized weighted gap of
+// mortar.hpp over the segment pairs that the search finds for the step.
+#pragma once
+
+#include <array>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "contact/mortar.hpp"
+#include "contact/search.hpp"
+#include "core/system.hpp"
+#include "core/unilateral.hpp"
+
+namespace emdae {
+
+/// A chain of straight segments on a body's boundary; each edge (a, b) holds
+/// system node indices and has the body on its left.
+struct ContactSurface {
+  std::string name;
+  std::vector<std::array<int, 2>> edges;
+};
+
+struct ContactOptions {
+  /// Search margin in units of the mean master segment length, added to the
+  /// distance the surfaces can close within a step (2 max|v| dt).
+  double search_margin = 1.0;
+};
+
+class MortarContact final : public UnilateralConstraints {
+ public:
+  MortarContact(const System& system, ContactSurface slave, ContactSurface master, std::string name,
+                ContactOptions options = {});
+
+  std::string name() const override { return name_; }
+  int size() const override { return static_cast<int>(slave_nodes_.size()); }
+  void prepare(const Vec& q, const Vec& v, double dt) override;
+  const Term* term(int i) const override { return terms_[static_cast<std::size_t>(i)].get(); }
+  /// Phi_i(q), or +infinity when less than kMinCoverage of the node's slave
+  /// segments lies opposite a master segment.
+  double gap(int i, const Vec& q) const override;
+  static constexpr double kMinCoverage = 1e-2;
+  std::string describe(int i) const override;
+
+  int slave_node(int i) const { return slave_nodes_[static_cast<std::size_t>(i)]; }
+  /// Mortar weight int N_A dGamma of slave node i in the reference configuration.
+  double weight(int i) const { return weights_[static_cast<std::size_t>(i)]; }
+  /// Segment pairs found by the last prepare(), and box tests it made.
+  long n_pairs() const { return n_pairs_; }
+  long n_box_tests() const { return grid_.tests(); }
+
+ private:
+  std::string name_;
+  ContactSurface slave_, master_;
+  ContactOptions options_;
+  std::vector<int> slave_nodes_;
+  std::vector<std::array<int, 2>> node_edges_;  // slave edges at each slave node (-1: none)
+  std::vector<double> weights_;
+  double mean_master_length_ = 0.0;
+  std::vector<std::unique_ptr<MortarGapTerm>> terms_;
+  BucketGrid grid_;
+  long n_pairs_ = 0;
+};
+
+}  // namespace emdae

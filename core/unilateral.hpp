@@ -1,0 +1,43 @@
+// Unilateral constraints: Phi_i(q) >= 0, lambda_i <= 0, lambda_i Phi_i = 0.
+//
+// Contact enters the system through this interface, so that the steppers in
+// integrators/ handle it without depending on contact/. A set has a fixed
+// number of candidates for the whole run (for mortar contact: the slave
+// nodes); before each step it is asked to prepare the candidates' functions
+// for that step (contact search), and those functions must not change until
+// the next call: every stepper evaluates the same Phi_i at q_n and q_{n+1},
+// which is what keeps lambda_i (Phi_i(q_{n+1}) - Phi_i(q_n)) out of the energy
+// balance for nodes in persistent contact.
+//
+// Sign convention: Phi_i >= 0 is the open gap (units of length), and the
+// force on the system is -lambda_i grad Phi_i, so lambda_i < 0 is compressive
+// and a node is released when its lambda_i turns positive (tensile).
+#pragma once
+
+#include <string>
+
+#include "core/term.hpp"
+
+namespace emdae {
+
+class UnilateralConstraints {
+ public:
+  virtual ~UnilateralConstraints() = default;
+  virtual std::string name() const = 0;
+  /// Number of candidates, fixed for the run.
+  virtual int size() const = 0;
+  /// Rebuilds the candidate functions for the step from (q, v) at t_n of
+  /// length dt: only what can touch within the step gets a function.
+  virtual void prepare(const Vec& q, const Vec& v, double dt) = 0;
+  /// The function of candidate i for the prepared step, or nullptr when it
+  /// cannot come into contact during the step.
+  virtual const Term* term(int i) const = 0;
+  /// Phi_i(q) for the prepared step, or +infinity when candidate i is not
+  /// engaged at q (no function, or nothing of the other body opposite it):
+  /// only engaged candidates can be activated.
+  virtual double gap(int i, const Vec& q) const = 0;
+  /// Describes candidate i for messages ("slave node 17 of ring_a").
+  virtual std::string describe(int i) const = 0;
+};
+
+}  // namespace emdae

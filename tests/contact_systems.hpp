@@ -1,0 +1,94 @@
+// Contact scenes built through the C++ API for the contact tests.
+#pragma once
+
+#include <memory>
+
+#include "contact/mortar_contact.hpp"
+#include "core/load.hpp"
+#include "core/mesh.hpp"
+#include "core/system.hpp"
+
+namespace emdae::test_systems {
+
+/// Edges of a mesh's named edge set, as system node indices.
+inline ContactSurface surface(const Mesh& mesh, const std::string& set, int node_offset) {
+  ContactSurface s{set, {}};
+  for (const auto& e : mesh.edge_sets.at(set)) s.edges.push_back({e[0] + node_offset, e[1] + node_offset});
+  return s;
+}
+
+struct RingImpact {
+  std::unique_ptr<System> system;
+  const MortarContact* contact = nullptr;
+};
+
+/// Two St. Venant-Kirchhoff rings (E = 100, nu = 0.1, rho = 0.001, the
+/// paper's §5.2) of radii r_in, r_out, n_around x n_through elements each,
+/// moving towards each other along x with `speed` each, the right one offset
+/// by `offset` in y (off-centre: non-zero angular momentum), their outer
+/// surfaces `gap` apart along the line of centres' x.
+inline RingImpact ring_impact(double gap, double speed, double offset, int n_around = 32,
+                              int n_through = 2, double r_in = 8.0, double r_out = 10.0,
+                              double young = 100.0) {
+  RingImpact out;
+  out.system = std::make_unique<System>(2);
+  System& s = *out.system;
+  const Material mat = make_material(MaterialModel::SaintVenantKirchhoff, young, 0.1, 0.001);
+  const Mesh left = ring_mesh(Eigen::Vector2d(-r_out - gap / 2, 0), r_in, r_out, n_around, n_through);
+  const Mesh right = ring_mesh(Eigen::Vector2d(r_out + gap / 2, offset), r_in, r_out, n_around, n_through);
+  BodyOptions a, b;
+  a.name = "left", a.velocity = Eigen::Vector2d(speed, 0);
+  b.name = "right", b.velocity = Eigen::Vector2d(-speed, 0);
+  const BodyInfo ia = add_body(s, left, mat, a);
+  const BodyInfo ib = add_body(s, right, mat, b);
+  auto contact = std::make_unique<MortarContact>(s, surface(left, "outer", ia.node_offset),
+                                                 surface(right, "outer", ib.node_offset), "rings");
+  out.contact = contact.get();
+  s.add_unilateral(std::move(contact));
+  return out;
+}
+
+}  // namespace emdae::test_systems
+
+namespace emdae::test_systems {
+
+struct Bearing {
+  std::unique_ptr<System> system;
+  const MortarContact* contact = nullptr;
+  BodyInfo outer, inner;
+  std::vector<int> inner_surface;  // the inner ring's inner boundary (torque, rotation hold)
+  double torque_peak = 0.0;
+};
+
+/// The paper's bearing (§5.1): outer ring (inner diameter 80, outer 100,
+/// 10 x 48 elements, outer boundary fixed), inner ring (inner diameter 50,
+/// outer 80.1: it overlaps the outer ring by 0.05 radially, 10 x 40
+/// elements), E = 1e5, nu = 0.1, rho = 0.001, frictionless contact of the
+/// inner ring's outer surface (slave) on the outer ring's inner surface
+/// (master), a torque hat(0, 0.5, peak) on the inner ring's inner boundary.
+inline Bearing bearing(double torque_peak = 1e4, int through = 10, int around_outer = 48,
+                       int around_inner = 40) {
+  Bearing b;
+  b.system = std::make_unique<System>(2);
+  System& s = *b.system;
+  b.torque_peak = torque_peak;
+  const Material mat = make_material(MaterialModel::SaintVenantKirchhoff, 1e5, 0.1, 0.001);
+  const Mesh outer = ring_mesh(Eigen::Vector2d::Zero(), 40.0, 50.0, around_outer, through);
+  const Mesh inner = ring_mesh(Eigen::Vector2d::Zero(), 25.0, 40.05, around_inner, through);
+  BodyOptions oo, io;
+  oo.name = "outer ring", io.name = "inner ring";
+  b.outer = add_body(s, outer, mat, oo);
+  b.inner = add_body(s, inner, mat, io);
+  for (int n : outer.node_sets.at("outer")) s.fix_node(n + b.outer.node_offset);
+  auto contact = std::make_unique<MortarContact>(s, surface(inner, "outer", b.inner.node_offset),
+                                                 surface(outer, "inner", b.outer.node_offset), "bearing");
+  b.contact = contact.get();
+  s.add_unilateral(std::move(contact));
+  std::vector<int> torque_nodes;
+  for (int n : inner.node_sets.at("inner")) torque_nodes.push_back(n + b.inner.node_offset);
+  b.inner_surface = torque_nodes;
+  s.add_load(make_torque(torque_nodes, TimeFunction::hat(0.0, 0.5, torque_peak), "torque"));
+  return b;
+}
+
+}  // namespace emdae::test_systems
