@@ -3,6 +3,8 @@
 #include <stdexcept>
 
 #include "integrators/energy_momentum.hpp"
+#include "integrators/generalized_alpha.hpp"
+#include "integrators/ida_stepper.hpp"
 #include "integrators/implicit_midpoint.hpp"
 
 namespace emdae {
@@ -19,12 +21,21 @@ State initial_state(const System& system) {
   return s;
 }
 
-std::vector<std::string> known_schemes() { return {"em", "midpoint"}; }
+std::vector<std::string> known_schemes() { return {"em", "midpoint", "ida", "galpha"}; }
 
 std::unique_ptr<Stepper> make_stepper(const std::string& name, const System& system,
                                       const NewtonSettings& newton, const SchemeSettings& scheme) {
   if (name == "em") return std::make_unique<EnergyMomentumStepper>(system, newton, scheme);
   if (name == "midpoint") return std::make_unique<ImplicitMidpointStepper>(system, newton, scheme);
+  if (name == "ida") {
+    IdaSettings ida;
+    ida.rtol = scheme.rtol;
+    ida.atol = scheme.atol;
+    return std::make_unique<IdaStepper>(system, ida);
+  }
+  if (name == "galpha")
+    return std::make_unique<GeneralizedAlphaStepper>(
+        system, GeneralizedAlphaSettings::chung_hulbert(scheme.rho_inf), newton);
   std::string known;
   for (const auto& k : known_schemes()) known += (known.empty() ? "" : ", ") + k;
   throw std::invalid_argument("unknown scheme '" + name + "' (known: " + known + ")");
