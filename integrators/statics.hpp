@@ -1,11 +1,11 @@
 // Static equilibrium, grad V(q) + G(q)^T lambda = f(q, t), with contact, by
-// pseudo-transient continuation: energy-momentum steps of length `pseudo_dt`
-// from rest, each ending at rest again, until the configuration stops
+// pseudo-transient continuation: implicit steps of length `pseudo_dt` from
+// rest (the scheme of midpoint_family.hpp with the forces taken at the end of
+// the step), each ending at rest again, until the configuration stops
 // changing. The mass term 2/h^2 M (q - q_prev) keeps the Newton matrix
 // regular where the static stiffness is singular (a ring held only by
 // frictionless contact can turn freely), and vanishes at convergence, where
-// q = q_prev and the discrete gradient is the exact gradient: the result is
-// the static solution itself. Used for the bearing's pre-stress (paper §5.1),
+// q = q_prev: the result is the static solution itself. Used for the bearing's pre-stress (paper §5.1),
 // the contact patch test and Hertz.
 //
 // A body held only by frictionless contact has a free rigid rotation, and a
