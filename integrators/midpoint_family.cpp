@@ -44,7 +44,7 @@ class MidpointFamilyStepper::Problem final : public NewtonProblem {
     assembler_.add_constraint_forces(kind_, q0_, q1, t0_, t1_, lambda, fq, &phi_, nullptr, n, n);
     if (!s_.loads().empty()) {
       load_.setZero(n);
-      s_.add_load_forces(0.5 * (q0_ + q1), 0.5 * (t0_ + t1_), load_);
+      s_.add_load_forces(load_point(q1), load_time(), load_);
       fq -= load_;
     }
     f.head(n) = fq;
@@ -62,14 +62,21 @@ class MidpointFamilyStepper::Problem final : public NewtonProblem {
     force_.setZero(n);
     assembler_.add_potential_forces(kind_, q0_, q1, t0_, t1_, force_, &trip_);
     assembler_.add_constraint_forces(kind_, q0_, q1, t0_, t1_, lambda, force_, nullptr, &trip_, n, n);
-    // Loads at the midpoint: d/dq1 of -f(q_mid) is -1/2 df/dq.
-    if (!s_.loads().empty()) s_.add_load_forces(0.5 * (q0_ + q1), 0.5 * (t0_ + t1_), force_, &trip_, -0.5);
+    // Loads at the midpoint: d/dq1 of -f(q_mid) is -1/2 df/dq (-df/dq at the end).
+    if (!s_.loads().empty())
+      s_.add_load_forces(load_point(q1), load_time(), force_, &trip_,
+                         kind_ == GradientKind::Exact ? -1.0 : -0.5);
     for (auto& e : trip_)  // G columns and Phi rows carry kappa (see the constructor)
       if (e.row() >= n || e.col() >= n) e = Eigen::Triplet<double, long>(e.row(), e.col(), kappa_ * e.value());
     for (const auto& p : s_.prescribed()) trip_.emplace_back(p.dof, p.dof, kappa_);
     j.resize(size(), size());
     j.setFromTriplets(trip_.begin(), trip_.end());
   }
+
+  // Where the loads act: at the midpoint for the midpoint and discrete
+  // gradients, at the end of the step with the forces there (Exact).
+  Vec load_point(const Vec& q1) const { return kind_ == GradientKind::Exact ? q1 : Vec(0.5 * (q0_ + q1)); }
+  double load_time() const { return kind_ == GradientKind::Exact ? t1_ : 0.5 * (t0_ + t1_); }
 
   /// Residual scale on momentum rows (see midpoint_family.hpp), 1 / kappa on
   /// constraint and prescribed rows (so that they are again lengths).
@@ -162,7 +169,8 @@ void MidpointFamilyStepper::velocity_from_momentum_balance(const State& start, c
                                   nullptr, 0, 0);
   Vec load = Vec::Zero(n);
   if (!system_.loads().empty()) {
-    system_.add_load_forces(0.5 * (start.q + q1), start.t + 0.5 * dt, load);
+    const bool at_end = kind_ == GradientKind::Exact;
+    system_.add_load_forces(at_end ? q1 : Vec(0.5 * (start.q + q1)), start.t + (at_end ? dt : 0.5 * dt), load);
     force -= load;
     work = load.dot(q1 - start.q);
   }

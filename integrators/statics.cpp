@@ -86,8 +86,8 @@ StaticResult solve_static_held(const System& system, State& state, const StaticS
   for (out.steps = 1; out.steps <= settings.max_steps; ++out.steps) {
     const Vec q_prev = state.q;
     state.v.setZero();
-    // Loads act at the step's midpoint: centre the pseudo step on t_load.
-    state.t = t_load - 0.5 * h;
+    // Loads and prescribed motions act at the end of the pseudo step.
+    state.t = t_load - h;
     const StepStats r = stepper.step(state, h);
     out.newton_iterations += r.iterations;
     if (!r.converged) {
