@@ -1,0 +1,28 @@
+// Gmsh meshes (MSH 4.1, ASCII) as emdae Meshes.
+//
+// The 4-node quadrilaterals of the physical surface `surface` (all surfaces
+// when empty) become the Mesh's quads, turned counter-clockwise where Gmsh
+// wrote them clockwise; the 2-node lines of every physical curve become an
+// edge set of the same name, each edge oriented as its quad traverses it (the
+// body on its left, the convention of mesh.hpp), and a node set with the
+// nodes of those edges. Nodes not used by the quads are dropped.
+// Anything the reader does not understand (another format version, binary
+// files, triangles in the surface, a curve line that is not on the surface's
+// boundary) is an error naming the file, the line and what was found.
+#pragma once
+
+#include <stdexcept>
+#include <string>
+
+#include "core/mesh.hpp"
+
+namespace emdae {
+
+class MeshFileError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+Mesh read_gmsh(const std::string& path, const std::string& surface = "");
+
+}  // namespace emdae
