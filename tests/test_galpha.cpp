@@ -20,7 +20,6 @@
 //  - the stored acceleration is re-initialized when the state is changed from
 //    outside, and parameters out of range are rejected with their value.
 #include <gsl/gsl_errno.h>
-#include <gsl/gsl_odeiv2.h>
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -33,45 +32,16 @@
 #include "core/quantities.hpp"
 #include "integrators/driver.hpp"
 #include "integrators/generalized_alpha.hpp"
+#include "pendulum.hpp"
 
 namespace emdae {
 namespace {
 
 constexpr double kNewtonTol = 1e-10;
 
-std::unique_ptr<System> pendulum() {
-  auto s = std::make_unique<System>(2);
-  s->add_node(Eigen::Vector2d(1, 0), Eigen::Vector2d(0, 1));
-  s->add_mass(0, 0, 1.0);
-  s->add_constraint(make_anchor_link(*s, 0, Eigen::Vector2d(0, 0), 1.0));
-  s->add_potential(make_dead_load(*s, 0, Eigen::Vector2d(0, -1)));
-  return s;
-}
-
-// Reference position and link tension at time t from the angle ODE (GSL
-// rk8pd, 1e-14).
-struct Reference {
-  Eigen::Vector2d q;
-  double lambda = 0.0;
-};
-
-Reference pendulum_reference(double t) {
-  auto rhs = [](double, const double y[], double dydt[], void*) -> int {
-    dydt[0] = y[1];
-    dydt[1] = -std::sin(y[0]);
-    return GSL_SUCCESS;
-  };
-  gsl_odeiv2_system sys{rhs, nullptr, 2, nullptr};
-  gsl_odeiv2_driver* d =
-      gsl_odeiv2_driver_alloc_y_new(&sys, gsl_odeiv2_step_rk8pd, 1e-3, 1e-14, 1e-14);
-  double y[2] = {M_PI / 2, 1.0};
-  double t0 = 0.0;
-  const int status = gsl_odeiv2_driver_apply(d, &t0, t, y);
-  gsl_odeiv2_driver_free(d);
-  if (status != GSL_SUCCESS) throw std::runtime_error("GSL reference failed");
-  // lambda from q . a + |v|^2 = 0 with a = (0, -1) - lambda q.
-  return {Eigen::Vector2d(std::sin(y[0]), -std::cos(y[0])), y[1] * y[1] + std::cos(y[0])};
-}
+using test_systems::pendulum;
+using test_systems::pendulum_reference;
+using Reference = test_systems::PendulumState;
 
 struct Outcome {
   bool ok = false;

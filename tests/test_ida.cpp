@@ -19,7 +19,6 @@
 //  - make_stepper builds "ida" and "galpha" and names all four schemes for an
 //    unknown one.
 #include <gsl/gsl_errno.h>
-#include <gsl/gsl_odeiv2.h>
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -33,18 +32,10 @@
 #include "core/user_term.hpp"
 #include "integrators/driver.hpp"
 #include "integrators/ida_stepper.hpp"
+#include "pendulum.hpp"
 
 namespace emdae {
 namespace {
-
-std::unique_ptr<System> pendulum() {
-  auto s = std::make_unique<System>(2);
-  s->add_node(Eigen::Vector2d(1, 0), Eigen::Vector2d(0, 1));
-  s->add_mass(0, 0, 1.0);
-  s->add_constraint(make_anchor_link(*s, 0, Eigen::Vector2d(0, 0), 1.0));
-  s->add_potential(make_dead_load(*s, 0, Eigen::Vector2d(0, -1)));
-  return s;
-}
 
 // The same pendulum hung from a node that is fixed (prescribed dofs) rather
 // than from an anchor point.
@@ -60,40 +51,10 @@ std::unique_ptr<System> pendulum_on_fixed_node() {
   return s;
 }
 
-// Reference position and velocity at time t from the angle ODE (GSL rk8pd).
-struct Reference {
-  Eigen::Vector2d q, v;
-};
-
-// Marches the same reference through increasing output times.
-class ReferenceIntegrator {
- public:
-  ReferenceIntegrator()
-      : driver_(gsl_odeiv2_driver_alloc_y_new(&sys_, gsl_odeiv2_step_rk8pd, 1e-3, 1e-14, 1e-14)) {}
-  ~ReferenceIntegrator() { gsl_odeiv2_driver_free(driver_); }
-  ReferenceIntegrator(const ReferenceIntegrator&) = delete;
-  ReferenceIntegrator& operator=(const ReferenceIntegrator&) = delete;
-
-  Reference at(double t) {
-    if (gsl_odeiv2_driver_apply(driver_, &t_, t, y_) != GSL_SUCCESS)
-      throw std::runtime_error("GSL reference failed");
-    return {Eigen::Vector2d(std::sin(y_[0]), -std::cos(y_[0])),
-            Eigen::Vector2d(std::cos(y_[0]) * y_[1], std::sin(y_[0]) * y_[1])};
-  }
-
- private:
-  static int rhs(double, const double y[], double dydt[], void*) {
-    dydt[0] = y[1];
-    dydt[1] = -std::sin(y[0]);
-    return GSL_SUCCESS;
-  }
-  gsl_odeiv2_system sys_{rhs, nullptr, 2, nullptr};
-  gsl_odeiv2_driver* driver_;
-  double t_ = 0.0;
-  double y_[2] = {M_PI / 2, 1.0};
-};
-
-Reference pendulum_reference(double t) { return ReferenceIntegrator().at(t); }
+using test_systems::pendulum;
+using test_systems::pendulum_reference;
+using Reference = test_systems::PendulumState;
+using ReferenceIntegrator = test_systems::PendulumReference;
 
 struct Outcome {
   bool ok = false;

@@ -1,0 +1,66 @@
+// The Cartesian pendulum of the reference-integrator tests (unit mass, unit
+// length, gravity 1, start at (1, 0) with velocity (0, 1)) and its
+// reference solution by an independent route: the angle from the downward
+// vertical obeys theta'' = -sin(theta), theta(0) = pi/2, theta'(0) = 1,
+// integrated by GSL's rk8pd to 1e-14; then q = (sin, -cos) theta,
+// v = (cos, sin) theta theta', and the link tension lambda = |v|^2 + cos theta
+// (from q . a + |v|^2 = 0 with a = (0, -1) - lambda q).
+#pragma once
+
+#include <gsl/gsl_errno.h>
+#include <gsl/gsl_odeiv2.h>
+
+#include <cmath>
+#include <memory>
+#include <stdexcept>
+
+#include "core/particles.hpp"
+#include "core/system.hpp"
+
+namespace emdae::test_systems {
+
+inline std::unique_ptr<System> pendulum() {
+  auto s = std::make_unique<System>(2);
+  s->add_node(Eigen::Vector2d(1, 0), Eigen::Vector2d(0, 1));
+  s->add_mass(0, 0, 1.0);
+  s->add_constraint(make_anchor_link(*s, 0, Eigen::Vector2d(0, 0), 1.0));
+  s->add_potential(make_dead_load(*s, 0, Eigen::Vector2d(0, -1)));
+  return s;
+}
+
+struct PendulumState {
+  Eigen::Vector2d q, v;
+  double lambda = 0.0;
+};
+
+/// Marches the reference through increasing output times.
+class PendulumReference {
+ public:
+  PendulumReference()
+      : driver_(gsl_odeiv2_driver_alloc_y_new(&sys_, gsl_odeiv2_step_rk8pd, 1e-3, 1e-14, 1e-14)) {}
+  ~PendulumReference() { gsl_odeiv2_driver_free(driver_); }
+  PendulumReference(const PendulumReference&) = delete;
+  PendulumReference& operator=(const PendulumReference&) = delete;
+
+  PendulumState at(double t) {
+    if (gsl_odeiv2_driver_apply(driver_, &t_, t, y_) != GSL_SUCCESS)
+      throw std::runtime_error("GSL reference failed");
+    const double s = std::sin(y_[0]), c = std::cos(y_[0]);
+    return {Eigen::Vector2d(s, -c), Eigen::Vector2d(c * y_[1], s * y_[1]), y_[1] * y_[1] + c};
+  }
+
+ private:
+  static int rhs(double, const double y[], double dydt[], void*) {
+    dydt[0] = y[1];
+    dydt[1] = -std::sin(y[0]);
+    return GSL_SUCCESS;
+  }
+  gsl_odeiv2_system sys_{rhs, nullptr, 2, nullptr};
+  gsl_odeiv2_driver* driver_;
+  double t_ = 0.0;
+  double y_[2] = {M_PI / 2, 1.0};
+};
+
+inline PendulumState pendulum_reference(double t) { return PendulumReference().at(t); }
+
+}  // namespace emdae::test_systems
