@@ -27,11 +27,15 @@ class BucketGrid {
   long tests() const { return tests_; }
 
  private:
-  std::int64_t key(long i, long j) const { return (static_cast<std::int64_t>(i) << 32) ^ (j & 0xffffffff); }
+  // Cell (i, j) as one 64-bit key; unsigned, since cells left of or below
+  // the origin have negative indices (a left shift of those is undefined).
+  std::uint64_t key(long i, long j) const {
+    return (static_cast<std::uint64_t>(i) << 32) ^ (static_cast<std::uint64_t>(j) & 0xffffffffu);
+  }
   long cell_of(double x) const;
   double cell_ = 1.0;
   std::vector<Box> boxes_;
-  std::unordered_map<std::int64_t, std::vector<int>> cells_;
+  std::unordered_map<std::uint64_t, std::vector<int>> cells_;
   mutable std::vector<int> stamp_;
   mutable int generation_ = 0;
   mutable long tests_ = 0;
