@@ -14,6 +14,9 @@
 #include <optional>
 #include <sstream>
 
+#include "contact/mortar_contact.hpp"
+#include "core/fe_element.hpp"
+#include "core/mesh.hpp"
 #include "core/particles.hpp"
 #include "integrators/stepper.hpp"
 
@@ -275,6 +278,43 @@ class Fields {
     return vector_of(*n, k, dim);
   }
 
+  // --- ranges and nested tables ---------------------------------------------------
+  /// An integer in [lo, hi], `fallback` when absent.
+  long integer_in(std::string_view k, long fallback, long lo, long hi) const {
+    const long x = integer(k, fallback);
+    if (x < lo) fail_key(k, fmt::format("must be at least {}, received {}", lo, x));
+    if (x > hi) fail_key(k, fmt::format("must be at most {}, received {}", hi, x));
+    return x;
+  }
+  std::optional<double> optional_non_negative(std::string_view k) const {
+    const auto x = optional_number(k);
+    if (x && *x < 0) fail_key(k, "must not be negative, received " + show(*find(k)));
+    return x;
+  }
+  /// A list of numbers (at least one).
+  std::vector<double> numbers(std::string_view k, const std::string& expected) const {
+    const auto& n = require(k, expected);
+    const auto* a = n.as_array();
+    if (!a || a->empty())
+      fail_at(n, k, "must be a non-empty list of numbers, received " + show_typed(n));
+    std::vector<double> out;
+    for (std::size_t i = 0; i < a->size(); ++i) {
+      const toml::node& e = *a->get(i);
+      if (!e.is_number() || !std::isfinite(e.value<double>().value_or(0.0)))
+        fail_at(n, k, "must be a list of finite numbers, received " + show(n));
+      out.push_back(e.value<double>().value_or(0.0));
+    }
+    return out;
+  }
+  /// The table under key k (`expected` says what it holds), as Fields whose
+  /// keys read "path.k.x" in messages.
+  Fields table(std::string_view k, const std::string& expected, const std::string& section) const {
+    const auto& n = require(k, expected);
+    const auto* t = n.as_table();
+    if (!t) fail_at(n, k, "must be a table (" + expected + "), received " + show_typed(n));
+    return Fields(loc_, *t, key(k), section);
+  }
+
  private:
   const Locator& loc_;
   const toml::table& table_;
@@ -293,6 +333,66 @@ struct ParticleRecord {
   std::string where;  // of its [[particles]] entry
 };
 
+struct BodyRecord {
+  std::string name;
+  std::string where;  // of its [[bodies]] entry
+  Mesh mesh;
+  BodyInfo info;
+  std::vector<double> node_mass;  // m_A = int rho N_A dV per mesh node (consistent row sums)
+};
+
+/// A named set of an FE body, "body.set".
+struct SetRef {
+  const BodyRecord* body = nullptr;
+  std::string set;
+  std::string label;  // "body.set"
+};
+
+enum class SetKind { Nodes, Edges };
+
+/// A time function as written, so that it can be built scaled (a torque's
+/// magnitude times the factor) and described.
+struct TimeSpec {
+  std::string type = "constant";
+  double start = 0.0, end = 0.0, value = 1.0;
+  std::vector<double> times, values;
+
+  TimeFunction make(double scale = 1.0) const {
+    if (type == "ramp") return TimeFunction::ramp(start, end, scale * value);
+    if (type == "hat") return TimeFunction::hat(start, end, scale * value);
+    if (type == "table") {
+      std::vector<double> v = values;
+      for (double& x : v) x *= scale;
+      return TimeFunction::table(times, v);
+    }
+    return TimeFunction::constant(scale * value);
+  }
+  std::string describe() const {
+    if (type == "ramp") return fmt::format("ramp({}, {}) to {}", start, end, value);
+    if (type == "hat") return fmt::format("hat({}, {}), peak {}", start, end, value);
+    if (type == "table") return fmt::format("table of {} points", times.size());
+    return fmt::format("constant {}", value);
+  }
+};
+
+/// g'(t) of a piecewise-linear time function: the slope of the piece that
+/// starts at or before t (the right derivative at a kink), 0 outside.
+double slope(const TimeFunction& g, double t) {
+  const std::vector<double> k = g.kinks();
+  if (k.size() < 2 || t < k.front() || t >= k.back()) return 0.0;
+  const auto it = std::upper_bound(k.begin(), k.end(), t);
+  const std::size_t i = static_cast<std::size_t>(it - k.begin());
+  return (g(k[i]) - g(k[i - 1])) / (k[i] - k[i - 1]);
+}
+
+/// True when the piecewise-linear g vanishes on all of [a, b].
+bool vanishes_on(const TimeFunction& g, double a, double b) {
+  if (g(a) != 0.0 || g(b) != 0.0) return false;
+  for (double t : g.kinks())
+    if (t > a && t < b && g(t) != 0.0) return false;
+  return true;
+}
+
 class Builder {
  public:
   Builder(Scene& scene, const Locator& loc) : scene_(scene), loc_(loc) {}
@@ -304,7 +404,12 @@ class Builder {
   void parse_spring(const Fields& f);
   void parse_link(const Fields& f);
   void parse_anchor(const Fields& f);
+  void parse_body(const Fields& f);
+  void parse_contact(const Fields& f);
+  void parse_dirichlet(const Fields& f);
   void parse_gravity(const Fields& f);
+  void parse_load(const Fields& f);
+  void parse_statics(const Fields& f);
   void parse_output(const Fields& f);
   void parse_tolerances(const Fields& f);
   void finish();
@@ -322,6 +427,22 @@ class Builder {
   void warn(const std::string& where, const std::string& what) {
     scene_.warnings.push_back(where + ": " + what);
   }
+  /// The mesh of a [[bodies]] entry, from its `mesh` table.
+  Mesh mesh(const Fields& f, std::string* text) const;
+  Material material(const Fields& f) const;
+  /// The set named by the string node `n` ("body.set") of key k.
+  SetRef set_ref(const Fields& f, std::string_view k, const toml::node& n, SetKind kind) const;
+  SetRef set_ref(const Fields& f, std::string_view k, SetKind kind,
+                 const std::string& expected) const {
+    return set_ref(f, k, f.require(k, expected), kind);
+  }
+  /// System nodes of a node set.
+  std::vector<int> nodes_of(const SetRef& r) const;
+  /// The time function under key k (constant 1 when absent).
+  TimeSpec time_function(const Fields& f, std::string_view k) const;
+  /// A name that is unique among `taken`, or the default.
+  std::string unique_name(const Fields& f, std::vector<std::string>& taken,
+                          const std::string& fallback, const char* what) const;
 
   Scene& scene_;
   const Locator& loc_;
@@ -329,6 +450,12 @@ class Builder {
   std::map<std::string, std::size_t> by_name_;
   // Rigid links by node pair (smaller first), with where they were declared.
   std::map<std::pair<int, int>, std::string> links_;
+  std::vector<BodyRecord> bodies_;
+  // Prescribed dofs: which [[dirichlet]] entry set them, and whether it fixed them.
+  std::map<int, std::pair<std::string, bool>> prescribed_by_;
+  std::vector<std::string> contact_names_, load_names_;
+  // Where things were declared that some schemes cannot run.
+  std::string scheme_where_, first_contact_where_, first_load_where_;
 };
 
 void Builder::parse_scene(const Fields& f) {
@@ -368,7 +495,8 @@ void Builder::parse_time(const Fields& f) {
 }
 
 void Builder::parse_scheme(const Fields& f) {
-  f.only({"name", "newton_tolerance", "newton_max_iterations", "line_search"});
+  f.only({"name", "newton_tolerance", "newton_max_iterations", "line_search", "rtol", "atol",
+          "rho_inf", "locate_impacts", "gap_tolerance"});
   if (const auto name = f.optional_string("name")) {
     const auto known = known_schemes();
     if (std::find(known.begin(), known.end(), *name) == known.end()) {
@@ -376,7 +504,28 @@ void Builder::parse_scheme(const Fields& f) {
                              hint(*name, known, "known schemes"));
     }
     scene_.scheme = *name;
+    scheme_where_ = f.where(*f.find("name"));
   }
+  SchemeSettings& ss = scene_.scheme_settings;
+  // Settings of one scheme given for another do nothing: say so, since a
+  // --scheme on the command line can make a scene's settings moot.
+  const auto only_for = [&](const char* k, const char* scheme) {
+    if (f.has(k) && scene_.scheme != scheme)
+      warn(f.where(*f.find(k)),
+           fmt::format("scheme.{} is only used by scheme {}, not {}", k, scheme, scene_.scheme));
+  };
+  ss.rtol = f.optional_positive("rtol").value_or(ss.rtol);
+  ss.atol = f.optional_positive("atol").value_or(ss.atol);
+  only_for("rtol", "ida");
+  only_for("atol", "ida");
+  if (const auto rho = f.optional_number("rho_inf")) {
+    if (*rho < 0 || *rho > 1)
+      f.fail_key("rho_inf", "must be in [0, 1], received " + show(*f.find("rho_inf")));
+    ss.rho_inf = *rho;
+  }
+  only_for("rho_inf", "galpha");
+  ss.locate_impacts = f.boolean("locate_impacts", ss.locate_impacts);
+  ss.gap_tolerance = f.optional_non_negative("gap_tolerance").value_or(ss.gap_tolerance);
   scene_.newton.tolerance = f.optional_positive("newton_tolerance").value_or(1e-10);
   const long it = f.integer("newton_max_iterations", 20);
   if (it < 1)
@@ -521,6 +670,449 @@ void Builder::parse_anchor(const Fields& f) {
   system().add_constraint(make_anchor_link(system(), p.node, point, l));
 }
 
+// --- FE bodies and what refers to them ----------------------------------------------
+
+std::string Builder::unique_name(const Fields& f, std::vector<std::string>& taken,
+                                 const std::string& fallback, const char* what) const {
+  std::string name = fallback;
+  if (const auto given = f.optional_string("name")) {
+    if (given->empty()) f.fail_key("name", "must not be empty, received \"\"");
+    name = *given;
+  }
+  if (std::find(taken.begin(), taken.end(), name) != taken.end())
+    f.fail_key("name", fmt::format("duplicate {} name, received \"{}\"", what, name));
+  taken.push_back(name);
+  return name;
+}
+
+Mesh Builder::mesh(const Fields& f, std::string* text) const {
+  const Fields m = f.table("mesh", "{type = \"ring\" | \"rectangle\", ...}", "a mesh");
+  const std::string type = m.string("type", "\"ring\" or \"rectangle\"");
+  // Element counts beyond this are a typo, not a mesh (and would overflow).
+  constexpr long kMaxCount = 100000, kMaxElements = 10000000;
+  if (type == "ring") {
+    m.only({"type", "centre", "inner_radius", "outer_radius", "around", "through"});
+    const Vec c = m.vector("centre", 2, "the ring's centre, 2 numbers");
+    const double r_in = m.positive("inner_radius", "the inner radius, a positive number");
+    const double r_out = m.positive("outer_radius", "the outer radius, a positive number");
+    if (!(r_out > r_in))
+      m.fail_key("outer_radius", "must exceed inner_radius = " + show_number(r_in) + ", received " +
+                                     show(*m.find("outer_radius")));
+    if (!m.has("around")) m.require("around", "elements around, an integer >= 3");
+    if (!m.has("through")) m.require("through", "elements through the wall, an integer >= 1");
+    const long around = m.integer_in("around", 0, 3, kMaxCount);
+    const long through = m.integer_in("through", 0, 1, kMaxCount);
+    if (around * through > kMaxElements)
+      m.fail_key("through", fmt::format("{} x {} elements is more than {} in one body, received {}",
+                                        around, through, kMaxElements, through));
+    *text = fmt::format("ring, {} x {} elements, radii {} .. {} about ({}, {})", around, through,
+                        r_in, r_out, c[0], c[1]);
+    return ring_mesh(Eigen::Vector2d(c[0], c[1]), r_in, r_out, static_cast<int>(around),
+                     static_cast<int>(through));
+  }
+  if (type == "rectangle") {
+    m.only({"type", "origin", "width", "height", "nx", "ny"});
+    const Vec o = m.vector("origin", 2, "the lower left corner, 2 numbers");
+    const double w = m.positive("width", "the width, a positive number");
+    const double h = m.positive("height", "the height, a positive number");
+    if (!m.has("nx")) m.require("nx", "elements along x, an integer >= 1");
+    if (!m.has("ny")) m.require("ny", "elements along y, an integer >= 1");
+    const long nx = m.integer_in("nx", 0, 1, kMaxCount);
+    const long ny = m.integer_in("ny", 0, 1, kMaxCount);
+    if (nx * ny > kMaxElements)
+      m.fail_key("ny", fmt::format("{} x {} elements is more than {} in one body, received {}", nx,
+                                   ny, kMaxElements, ny));
+    *text =
+        fmt::format("rectangle, {} x {} elements, {} x {} from ({}, {})", nx, ny, w, h, o[0], o[1]);
+    return rectangle_mesh(Eigen::Vector2d(o[0], o[1]), w, h, static_cast<int>(nx),
+                          static_cast<int>(ny));
+  }
+  m.fail_key("type", "unknown mesh type, received " + show(*m.find("type")) +
+                         hint(type, {"ring", "rectangle"}, "mesh types"));
+}
+
+Material Builder::material(const Fields& f) const {
+  const Fields m = f.table("material", "{model, young, poisson, density}", "a material");
+  m.only({"model", "young", "poisson", "density"});
+  MaterialModel model = MaterialModel::SaintVenantKirchhoff;
+  if (const auto name = m.optional_string("model")) {
+    try {
+      model = parse_material_model(*name);
+    } catch (const std::invalid_argument&) {
+      m.fail_key("model", "unknown material model, received " + show(*m.find("model")) +
+                              hint(*name, {"svk", "neo-hooke"}, "models"));
+    }
+  }
+  const double young = m.positive("young", "Young's modulus E, a positive number");
+  const double nu = m.number("poisson", "Poisson's ratio, in (-1, 0.5)");
+  // nu -> 0.5 is incompressible (lambda infinite), nu <= -1 makes mu <= 0.
+  if (!(nu > -1.0 && nu < 0.5))
+    m.fail_key("poisson", "must be in (-1, 0.5), received " + show(*m.find("poisson")));
+  const double rho = m.positive("density", "the mass density, a positive number");
+  try {
+    return make_material(model, young, nu, rho);
+  } catch (const std::invalid_argument& e) {
+    fail(m.where(), m.path(), e.what());
+  }
+}
+
+void Builder::parse_body(const Fields& f) {
+  f.only({"name", "mesh", "material", "velocity", "angular_velocity", "lumped_mass"});
+  if (scene_.dimension != 2)
+    fail(f.where(), f.path(),
+         fmt::format("FE bodies are plane strain and need scene.dimension = 2, received "
+                     "dimension {}",
+                     scene_.dimension));
+  BodyRecord b;
+  b.where = f.where();
+  b.name = f.string("name", "a unique name for the body");
+  // The name is the first half of "body.set" references.
+  if (b.name.empty() || b.name.find('.') != std::string::npos)
+    f.fail_key("name", "must be non-empty and without '.', received " + show(*f.find("name")));
+  for (const auto& other : bodies_)
+    if (other.name == b.name)
+      f.fail_key("name", "duplicate body name, received \"" + b.name + "\" (first defined at " +
+                             other.where + ")");
+  SceneBody out;
+  b.mesh = mesh(f, &out.mesh);
+  const Material mat = material(f);
+  BodyOptions options;
+  options.name = b.name;
+  options.lumped_mass = f.boolean("lumped_mass", false);
+  const Vec v = f.optional_vector("velocity", 2).value_or(Vec::Zero(2));
+  options.velocity = Eigen::Vector2d(v[0], v[1]);
+  options.angular_velocity = f.optional_number("angular_velocity").value_or(0.0);
+  try {
+    b.info = add_body(system(), b.mesh, mat, options);
+  } catch (const std::invalid_argument& e) {
+    fail(f.where(), f.path(), e.what());
+  }
+  // The consistent nodal masses int rho N_A dV: a body force b puts m_A b on
+  // node A (the consistent load vector), gravity likewise.
+  b.node_mass.assign(static_cast<std::size_t>(b.mesh.n_nodes()), 0.0);
+  for (int e = 0; e < b.mesh.n_elements(); ++e) {
+    const Eigen::Matrix4d me = q1_mass_matrix(b.mesh.quad_nodes(e), mat.density);
+    const auto& quad = b.mesh.quads[static_cast<std::size_t>(e)];
+    for (int a = 0; a < 4; ++a) b.node_mass[static_cast<std::size_t>(quad[a])] += me.row(a).sum();
+  }
+  out.name = b.name;
+  out.material = mat.describe();
+  out.geometry = b.mesh;
+  out.elastic = mat;
+  out.node_offset = b.info.node_offset;
+  out.n_nodes = b.info.n_nodes;
+  out.n_elements = b.info.n_elements;
+  for (double m : b.node_mass) out.mass += m;
+  for (const auto& [set, nodes] : b.mesh.node_sets) out.node_sets.push_back(set);
+  for (const auto& [set, edges] : b.mesh.edge_sets) out.edge_sets.push_back(set);
+  scene_.bodies.push_back(std::move(out));
+  bodies_.push_back(std::move(b));
+}
+
+SetRef Builder::set_ref(const Fields& f, std::string_view k, const toml::node& n,
+                        SetKind kind) const {
+  const char* kind_name = kind == SetKind::Nodes ? "node set" : "edge set";
+  if (!n.is_string())
+    f.fail_at(
+        n, k,
+        std::string("must name a ") + kind_name + " as \"body.set\", received " + show_typed(n));
+  const std::string& text = n.as_string()->get();
+  std::vector<std::string> names;
+  for (const auto& b : bodies_) names.push_back(b.name);
+  const auto dot = text.find('.');
+  if (dot == std::string::npos)
+    f.fail_at(n, k,
+              std::string("must name a ") + kind_name + " as \"body.set\" (e.g. \"" +
+                  (names.empty() ? std::string("ring") : names.front()) + ".outer\"), received " +
+                  show(n));
+  const std::string body = text.substr(0, dot), set = text.substr(dot + 1);
+  const auto it = std::find_if(bodies_.begin(), bodies_.end(),
+                               [&](const BodyRecord& b) { return b.name == body; });
+  if (it == bodies_.end())
+    f.fail_at(n, k,
+              "unknown body '" + body + "', received " + show(n) +
+                  (names.empty() ? std::string(" (the scene has no [[bodies]] before this)")
+                                 : hint(body, names, "bodies")));
+  std::vector<std::string> sets;
+  if (kind == SetKind::Nodes) {
+    for (const auto& [name, nodes] : it->mesh.node_sets) sets.push_back(name);
+  } else {
+    for (const auto& [name, edges] : it->mesh.edge_sets) sets.push_back(name);
+  }
+  if (std::find(sets.begin(), sets.end(), set) == sets.end())
+    f.fail_at(n, k,
+              "body '" + body + "' has no " + kind_name + " '" + set + "', received " + show(n) +
+                  hint(set, sets, std::string(kind_name) + "s of '" + body + "'"));
+  return SetRef{&*it, set, text};
+}
+
+std::vector<int> Builder::nodes_of(const SetRef& r) const {
+  std::vector<int> out;
+  for (int n : r.body->mesh.node_sets.at(r.set)) out.push_back(n + r.body->info.node_offset);
+  return out;
+}
+
+TimeSpec Builder::time_function(const Fields& f, std::string_view k) const {
+  TimeSpec spec;
+  if (!f.has(k)) return spec;
+  const Fields t =
+      f.table(k, "{type = \"constant\" | \"ramp\" | \"hat\" | \"table\", ...}", "a time function");
+  spec.type = t.string("type", "\"constant\", \"ramp\", \"hat\" or \"table\"");
+  const std::vector<std::string> types = {"constant", "ramp", "hat", "table"};
+  if (std::find(types.begin(), types.end(), spec.type) == types.end())
+    t.fail_key("type", "unknown time function, received " + show(*t.find("type")) +
+                           hint(spec.type, types, "time functions"));
+  if (spec.type == "constant") {
+    t.only({"type", "value"});
+    spec.value = t.optional_number("value").value_or(1.0);
+  } else if (spec.type == "ramp" || spec.type == "hat") {
+    const char* height = spec.type == "ramp" ? "value" : "peak";
+    t.only({"type", "start", "end", height});
+    spec.start = t.number("start", "the time it starts");
+    spec.end = t.number("end", "the time it ends, after start");
+    if (!(spec.end > spec.start))
+      t.fail_key("end", "must exceed start = " + show_number(spec.start) + ", received " +
+                            show(*t.find("end")));
+    spec.value = t.optional_number(height).value_or(1.0);
+  } else {
+    t.only({"type", "times", "values"});
+    spec.times = t.numbers("times", "increasing times, a list of numbers");
+    spec.values = t.numbers("values", "the values at those times, a list of numbers");
+    for (std::size_t i = 1; i < spec.times.size(); ++i)
+      if (!(spec.times[i] > spec.times[i - 1]))
+        t.fail_key("times", "must increase strictly, received " + show(*t.find("times")));
+    if (spec.values.size() != spec.times.size())
+      t.fail_key("values", fmt::format("must have as many entries as times ({}), received {}",
+                                       spec.times.size(), show(*t.find("values"))));
+  }
+  return spec;
+}
+
+void Builder::parse_contact(const Fields& f) {
+  f.only({"name", "slave", "master", "search_margin"});
+  const std::string where = f.where();
+  if (first_contact_where_.empty()) first_contact_where_ = where;
+  const SetRef slave = set_ref(f, "slave", SetKind::Edges, "the slave surface, \"body.set\"");
+  const SetRef master = set_ref(f, "master", SetKind::Edges, "the master surface, \"body.set\"");
+  if (slave.label == master.label)
+    f.fail_key("master",
+               "slave and master are the same surface, received " + show(*f.find("master")));
+  if (slave.body == master.body)
+    warn(where, "slave and master are on the same body '" + slave.body->name +
+                    "': self-contact is not what the mortar contact was verified for");
+  const std::string name =
+      unique_name(f, contact_names_, slave.label + "/" + master.label, "contact");
+  ContactOptions options;
+  options.search_margin = f.optional_non_negative("search_margin").value_or(options.search_margin);
+  const auto surface = [](const SetRef& r) {
+    ContactSurface s{r.label, {}};
+    for (const auto& e : r.body->mesh.edge_sets.at(r.set))
+      s.edges.push_back({e[0] + r.body->info.node_offset, e[1] + r.body->info.node_offset});
+    return s;
+  };
+  ContactSurface s = surface(slave), m = surface(master);
+  SceneContact out{name,
+                   slave.label,
+                   master.label,
+                   static_cast<int>(s.edges.size()),
+                   static_cast<int>(m.edges.size()),
+                   0};
+  try {
+    auto contact =
+        std::make_unique<MortarContact>(system(), std::move(s), std::move(m), name, options);
+    out.candidates = contact->size();
+    system().add_unilateral(std::move(contact));
+  } catch (const std::invalid_argument& e) {
+    fail(where, f.path(), e.what());
+  }
+  scene_.contacts.push_back(std::move(out));
+}
+
+void Builder::parse_dirichlet(const Fields& f) {
+  f.only({"nodes", "fixed", "displacement", "time_function", "components"});
+  const SetRef set = set_ref(f, "nodes", SetKind::Nodes, "the node set, \"body.set\"");
+  const bool fixed = f.boolean("fixed", false);
+  const auto u = f.optional_vector("displacement", 2);
+  if (fixed && u)
+    f.fail_key("displacement", "give either fixed = true or a displacement, not both, received " +
+                                   show(*f.find("displacement")));
+  if (!fixed && !u)
+    f.fail_key("fixed", "nothing prescribed: give fixed = true or displacement = [ux, uy]" +
+                            std::string(f.has("fixed") ? ", received false" : ""));
+  if (!u && f.has("time_function"))
+    f.fail_key("time_function", "only a displacement has a time function, received " +
+                                    show(*f.find("time_function")));
+  std::vector<int> components = {0, 1};
+  if (const auto c = f.optional_string("components")) {
+    if (*c == "x") {
+      components = {0};
+    } else if (*c == "y") {
+      components = {1};
+    } else if (*c != "xy") {
+      f.fail_key("components",
+                 "must be \"xy\", \"x\" or \"y\", received " + show(*f.find("components")));
+    }
+  }
+  const std::string where = f.where();
+  SceneDirichlet out;
+  out.nodes = set.label;
+  const std::string axes = components.size() == 2 ? "x, y" : (components[0] == 0 ? "x" : "y");
+  const TimeSpec spec = u ? time_function(f, "time_function") : TimeSpec{};
+  const TimeFunction g = spec.make();
+  if (u) {
+    out.what =
+        fmt::format("displacement [{}, {}] ({}) x {}", (*u)[0], (*u)[1], axes, spec.describe());
+    if (g(0.0) != 0.0)
+      warn(where, "the displacement's time function is " + show_number(g(0.0)) +
+                      " at t = 0: the nodes of " + set.label + " start displaced");
+  } else {
+    out.what = "fixed (" + axes + ")";
+  }
+  const Vec& x0 = system().initial_positions();
+  for (int node : nodes_of(set)) {
+    ++out.n_nodes;
+    for (int c : components) {
+      const int dof = system().dof(node, c);
+      if (const auto it = prescribed_by_.find(dof); it != prescribed_by_.end()) {
+        // Two fixings of a shared corner agree; anything else contradicts.
+        if (it->second.second && fixed) continue;
+        f.fail_key("nodes", "node " + std::to_string(node) + " of " + set.label +
+                                " is already prescribed by the [[dirichlet]] entry at " +
+                                it->second.first + ", received " + show(*f.find("nodes")));
+      }
+      prescribed_by_[dof] = {where, fixed};
+      ++out.n_dofs;
+      if (fixed) {
+        system().prescribe({dof, {}, {}});
+      } else {
+        const double start = x0[dof], amount = (*u)[c];
+        system().prescribe({dof, [g, start, amount](double t) { return start + amount * g(t); },
+                            [g, amount](double t) { return amount * slope(g, t); }});
+      }
+    }
+  }
+  scene_.dirichlet.push_back(std::move(out));
+}
+
+void Builder::parse_load(const Fields& f) {
+  f.only({"name", "type", "on", "body", "torque", "acceleration", "traction", "time_function"});
+  if (first_load_where_.empty()) first_load_where_ = f.where();
+  const std::string type = f.string("type", "\"torque\", \"body_force\" or \"traction\"");
+  const std::vector<std::string> types = {"torque", "body_force", "traction"};
+  if (std::find(types.begin(), types.end(), type) == types.end())
+    f.fail_key("type", "unknown load type, received " + show(*f.find("type")) +
+                           hint(type, types, "load types"));
+  // Keys of the other load types are mistakes, not options.
+  const std::map<std::string, std::vector<std::string>> keys = {
+      {"torque", {"on", "torque"}},
+      {"body_force", {"body", "acceleration"}},
+      {"traction", {"on", "traction"}}};
+  for (const auto& k : {"on", "body", "torque", "acceleration", "traction"}) {
+    const auto& mine = keys.at(type);
+    if (f.has(k) && std::find(mine.begin(), mine.end(), k) == mine.end())
+      f.fail_key(k, "not a key of a " + type + " load (its keys: " + join(mine) + "), received " +
+                        show(*f.find(k)));
+  }
+  SceneLoad out;
+  out.type = type;
+  out.name = unique_name(f, load_names_, fmt::format("{} {}", type, load_names_.size()), "load");
+  const TimeSpec spec = time_function(f, "time_function");
+  out.time_function = spec.describe();
+  out.g = spec.make();
+  std::unique_ptr<Load> load;
+  if (type == "torque") {
+    const SetRef set = set_ref(f, "on", SetKind::Nodes, "the node set it acts on, \"body.set\"");
+    const double t = f.number("torque", "the torque (moment), a number");
+    const std::vector<int> nodes = nodes_of(set);
+    if (nodes.size() < 2)
+      f.fail_key("on",
+                 "a torque needs a set of at least two nodes, received " + show(*f.find("on")));
+    out.on = set.label;
+    out.magnitude = fmt::format("torque {}", t);
+    // make_torque takes T(t) itself: the factor scaled by the magnitude.
+    load = make_torque(nodes, spec.make(t), out.name);
+  } else if (type == "body_force") {
+    const auto& n = f.require("body", "the name of the body it acts on");
+    if (!n.is_string()) f.fail_at(n, "body", "must name a body, received " + show_typed(n));
+    const std::string name = n.as_string()->get();
+    const auto it = std::find_if(bodies_.begin(), bodies_.end(),
+                                 [&](const BodyRecord& b) { return b.name == name; });
+    if (it == bodies_.end()) {
+      std::vector<std::string> names;
+      for (const auto& b : bodies_) names.push_back(b.name);
+      f.fail_at(n, "body", "unknown body, received " + show(n) + hint(name, names, "bodies"));
+    }
+    const Vec b = f.vector("acceleration", 2, "the force per unit mass, 2 numbers");
+    std::vector<int> dofs;
+    Vec forces(2 * it->mesh.n_nodes());
+    for (int a = 0; a < it->mesh.n_nodes(); ++a)
+      for (int c = 0; c < 2; ++c) {
+        dofs.push_back(system().dof(it->info.node_offset + a, c));
+        forces[2 * a + c] = it->node_mass[static_cast<std::size_t>(a)] * b[c];
+      }
+    out.on = it->name;
+    out.magnitude = fmt::format("acceleration [{}, {}]", b[0], b[1]);
+    load = make_nodal_load(std::move(dofs), std::move(forces), out.g, out.name);
+  } else {
+    const SetRef set = set_ref(f, "on", SetKind::Edges, "the edge set it acts on, \"body.set\"");
+    const Vec t = f.vector("traction", 2, "the force per unit (reference) length, 2 numbers");
+    // Constant traction on a straight edge: half of t L on each end node.
+    std::map<int, Eigen::Vector2d> nodal;
+    const int offset = set.body->info.node_offset;
+    for (const auto& e : set.body->mesh.edge_sets.at(set.set)) {
+      const double length = (set.body->mesh.nodes[static_cast<std::size_t>(e[1])] -
+                             set.body->mesh.nodes[static_cast<std::size_t>(e[0])])
+                                .norm();
+      for (int a : e) {
+        auto [it, inserted] = nodal.emplace(a + offset, Eigen::Vector2d::Zero());
+        it->second += 0.5 * length * Eigen::Vector2d(t[0], t[1]);
+      }
+    }
+    std::vector<int> dofs;
+    Vec forces(2 * static_cast<Eigen::Index>(nodal.size()));
+    Eigen::Index i = 0;
+    for (const auto& [node, force] : nodal)
+      for (int c = 0; c < 2; ++c) {
+        dofs.push_back(system().dof(node, c));
+        forces[i++] = force[c];
+      }
+    out.on = set.label;
+    out.magnitude = fmt::format("traction [{}, {}]", t[0], t[1]);
+    load = make_nodal_load(std::move(dofs), std::move(forces), out.g, out.name);
+  }
+  system().add_load(std::move(load));
+  scene_.loads.push_back(std::move(out));
+}
+
+void Builder::parse_statics(const Fields& f) {
+  f.only({"enabled", "hold_rotation", "pseudo_dt", "tolerance", "max_steps", "newton_tolerance"});
+  SceneStatics& st = scene_.statics;
+  // Writing the section means wanting it; enabled = false switches it off
+  // (e.g. --set statics.enabled=false) without deleting it.
+  st.enabled = f.boolean("enabled", true);
+  StaticSettings& s = st.settings;
+  s.pseudo_dt = f.optional_positive("pseudo_dt").value_or(s.pseudo_dt);
+  s.tolerance = f.optional_positive("tolerance").value_or(s.tolerance);
+  s.max_steps = static_cast<int>(f.integer_in("max_steps", s.max_steps, 1, 100000));
+  s.newton = scene_.newton;
+  s.newton.tolerance = f.optional_positive("newton_tolerance").value_or(scene_.newton.tolerance);
+  if (const auto* n = f.find("hold_rotation")) {
+    const auto* a = n->as_array();
+    if (!a)
+      f.fail_at(*n, "hold_rotation",
+                "must be a list of node sets [\"body.set\", ...], received " + show_typed(*n));
+    for (std::size_t i = 0; i < a->size(); ++i) {
+      const SetRef set = set_ref(f, "hold_rotation", *a->get(i), SetKind::Nodes);
+      const std::vector<int> nodes = nodes_of(set);
+      if (nodes.size() < 2)
+        f.fail_at(*n, "hold_rotation",
+                  "holding a rotation needs a set of at least two nodes, received " + show(*n));
+      st.hold_names.push_back(set.label);
+      st.hold_rotation.push_back(nodes);
+    }
+  }
+}
+
 void Builder::parse_gravity(const Fields& f) {
   f.only({"acceleration"});
   const int dim = scene_.dimension;
@@ -529,28 +1121,70 @@ void Builder::parse_gravity(const Fields& f) {
   if (g.norm() == 0) return;
   for (const auto& p : particles_)
     if (!p.fixed) system().add_potential(make_dead_load(system(), p.node, p.mass * g));
+  // Body nodes get their consistent share m_A g, as a potential (a dead load
+  // is conservative); nodes prescribed in every direction get none.
+  const auto& prescribed = system().is_prescribed();
+  for (const auto& b : bodies_)
+    for (int a = 0; a < b.mesh.n_nodes(); ++a) {
+      const int node = b.info.node_offset + a;
+      if (prescribed[static_cast<std::size_t>(system().dof(node, 0))] &&
+          prescribed[static_cast<std::size_t>(system().dof(node, 1))])
+        continue;
+      system().add_potential(
+          make_dead_load(system(), node, b.node_mass[static_cast<std::size_t>(a)] * g));
+    }
 }
 
 void Builder::parse_output(const Fields& f) {
-  f.only({"every"});
+  f.only({"every", "vtu_every"});
   const long every = f.integer("every", 1);
   if (every < 1) f.fail_key("every", "must be at least 1, received " + std::to_string(every));
   scene_.output.every = static_cast<int>(std::min<long>(every, 1L << 30));
+  const long vtu_every = f.integer("vtu_every", -1);
+  if (f.has("vtu_every") && vtu_every < 0)
+    f.fail_key("vtu_every", "must be 0 (no fields) or at least 1, received " +
+                                std::to_string(vtu_every));
+  scene_.output.vtu_every = vtu_every;
 }
 
 void Builder::parse_tolerances(const Fields& f) {
-  f.only({"energy_rel", "linear_momentum", "angular_momentum_rel", "constraint"});
+  f.only({"energy_rel", "energy_balance_rel", "linear_momentum", "angular_momentum_rel",
+          "angular_momentum_balance_rel", "constraint", "gap_violation", "penetration"});
   Tolerances& t = scene_.tolerances;
   t.energy_rel = f.optional_positive("energy_rel");
+  t.energy_balance_rel = f.optional_positive("energy_balance_rel");
   t.linear_momentum = f.optional_positive("linear_momentum");
   t.angular_momentum_rel = f.optional_positive("angular_momentum_rel");
+  t.angular_momentum_balance_rel = f.optional_positive("angular_momentum_balance_rel");
   t.constraint = f.optional_positive("constraint");
+  t.gap_violation = f.optional_positive("gap_violation");
+  t.penetration = f.optional_positive("penetration");
 }
 
 void Builder::finish() {
-  if (std::none_of(particles_.begin(), particles_.end(), [](const auto& p) { return !p.fixed; }))
-    fail(particles_.empty() ? loc_.start() : particles_.front().where, "particles",
-         "every particle is fixed: nothing to integrate");
+  if (particles_.empty() && bodies_.empty())
+    fail(loc_.start(), "bodies",
+         "missing: the scene has no [[bodies]] and no [[particles]], nothing to integrate");
+  if (bodies_.empty() &&
+      std::none_of(particles_.begin(), particles_.end(), [](const auto& p) { return !p.fixed; }))
+    fail(particles_.front().where, "particles", "every particle is fixed: nothing to integrate");
+  if (static_cast<int>(system().prescribed().size()) == system().n_dofs())
+    fail(loc_.start(), "dirichlet", "every node is prescribed: nothing to integrate");
+  // The reference schemes are written for smooth DAEs: they refuse contact
+  // and do not apply external loads. Said here, at the scheme's name, rather
+  // than as the stepper's exception after the scene was accepted.
+  if (scene_.scheme == "ida" || scene_.scheme == "galpha") {
+    const std::string where = scheme_where_.empty() ? loc_.start() : scheme_where_;
+    const std::string received = ", received \"" + scene_.scheme + "\"";
+    if (!first_contact_where_.empty())
+      fail(where, "scheme.name",
+           "scheme '" + scene_.scheme + "' does not support contact (the [[contacts]] at " +
+               first_contact_where_ + "); use \"em\" or \"midpoint\"" + received);
+    if (!first_load_where_.empty())
+      fail(where, "scheme.name",
+           "scheme '" + scene_.scheme + "' does not apply external loads (the [[loads]] at " +
+               first_load_where_ + "); use \"em\" or \"midpoint\"" + received);
+  }
   try {
     scene_.system->validate();
   } catch (const std::invalid_argument& e) {
@@ -572,18 +1206,24 @@ struct Section {
   void (Builder::*parse)(const Fields&);
 };
 
-// Later sections may refer to earlier ones (springs name particles, gravity
-// weighs them), so the order matters; [scene] comes first for the dimension.
+// Later sections may refer to earlier ones (springs name particles, contacts
+// and loads name body sets, gravity weighs particles and the free body nodes,
+// statics holds body sets), so the order matters; [scene] comes first for the
+// dimension.
 const Section kSections[] = {
     {"scene", Kind::Table, false, true, "", &Builder::parse_scene},
     {"time", Kind::Table, true, false, "[time] with dt and t_end", &Builder::parse_time},
     {"scheme", Kind::Table, false, true, "", &Builder::parse_scheme},
-    {"particles", Kind::ArrayOfTables, true, false, "at least one [[particles]] entry",
-     &Builder::parse_particle},
+    {"particles", Kind::ArrayOfTables, false, false, "", &Builder::parse_particle},
     {"springs", Kind::ArrayOfTables, false, false, "", &Builder::parse_spring},
     {"links", Kind::ArrayOfTables, false, false, "", &Builder::parse_link},
     {"anchors", Kind::ArrayOfTables, false, false, "", &Builder::parse_anchor},
+    {"bodies", Kind::ArrayOfTables, false, false, "", &Builder::parse_body},
+    {"contacts", Kind::ArrayOfTables, false, false, "", &Builder::parse_contact},
+    {"dirichlet", Kind::ArrayOfTables, false, false, "", &Builder::parse_dirichlet},
     {"gravity", Kind::Table, false, false, "", &Builder::parse_gravity},
+    {"loads", Kind::ArrayOfTables, false, false, "", &Builder::parse_load},
+    {"statics", Kind::Table, false, false, "", &Builder::parse_statics},
     {"output", Kind::Table, false, true, "", &Builder::parse_output},
     {"tolerances", Kind::Table, false, false, "", &Builder::parse_tolerances},
 };
@@ -802,7 +1442,7 @@ std::unique_ptr<Scene> load_scene_text(std::string_view text, const std::string&
   if (root.empty() && overrides.empty())
     throw SceneError(source_name +
                      ":1:1: the scene file is empty (a scene needs at least [time] "
-                     "and [[particles]])");
+                     "and [[particles]] or [[bodies]])");
   for (const auto& o : overrides) apply_override(root, o);
 
   auto scene = std::make_unique<Scene>();
@@ -811,6 +1451,11 @@ std::unique_ptr<Scene> load_scene_text(std::string_view text, const std::string&
   Builder builder(*scene, loc);
   build(builder, loc, root);
   return scene;
+}
+
+bool Scene::loads_vanish(double a, double b) const {
+  return std::all_of(loads.begin(), loads.end(),
+                     [&](const SceneLoad& l) { return vanishes_on(l.g, a, b); });
 }
 
 std::unique_ptr<Scene> load_scene(const std::string& path,

@@ -116,6 +116,7 @@ StaticResult solve_static_held(const System& system, State& state, const StaticS
     }
   }
   state.v.setZero();
+  out.steps = settings.max_steps;
   std::ostringstream msg;
   msg << "static solve: not converged after " << settings.max_steps << " pseudo steps (last change "
       << out.change << ")";

@@ -279,16 +279,25 @@ TEST(Cli, DefaultOutputFolderIsSceneAndScheme) {
   EXPECT_TRUE(fs::exists(dir / "out/elastic_pendulum-midpoint/history.csv"));
 }
 
+// The paper's two-ring impact (examples/ring_impact.toml), to t = 20: the
+// longest run of the suite (about 10 s), since no argument can shorten it.
 TEST(Cli, NoArgumentsRunsTheBuiltInDefaultScene) {
   TempDir dir;
   const Result r = emdae("", dir.path());
   ASSERT_EQ(r.code, 0) << r.output;
   const nlohmann::json s = read_json(dir / "out/default/summary.json");
   EXPECT_EQ(s["status"], "ok");
-  EXPECT_EQ(s["scene"], "double_pendulum");
+  EXPECT_EQ(s["scene"], "ring_impact");
   EXPECT_EQ(s["scheme"], "em");
+  EXPECT_EQ(s["steps"], 2000);
   EXPECT_LT(s["energy_rel_error_max"].get<double>(), 1e-8);
-  EXPECT_EQ(read_lines(dir / "out/default/history.csv")[0], kHeader2D);
+  // Contact from t = 6.1 to 15.4 (the paper's window is [6, 16]).
+  ASSERT_TRUE(s["contact_window"].is_array()) << s;
+  EXPECT_NEAR(s["contact_window"][0].get<double>(), 6.1, 0.1);
+  EXPECT_NEAR(s["contact_window"][1].get<double>(), 15.4, 0.3);
+  EXPECT_EQ(read_lines(dir / "out/default/history.csv")[0],
+            std::string(kHeader2D) +
+                ",active_contacts,contact_events,gap_violation_max,penetration_max");
 }
 
 TEST(Cli, NumericalFailureExitsThreeAndKeepsTheRecord) {

@@ -64,9 +64,9 @@ HertzFigures hertz(int around, int through, int nx, int ny) {
   ss.newton.tolerance = 1e-10;
   for (int k = 1; k <= 4; ++k) {  // load increments: the push is a ramp in t
     st.t = 0.25 * k;
-    const StaticResult r = solve_static(s, st, ss);
-    EXPECT_TRUE(r.converged) << r.message;
-    if (!r.converged) return out;
+    const StaticResult result = solve_static(s, st, ss);
+    EXPECT_TRUE(result.converged) << result.message;
+    if (!result.converged) return out;
   }
   out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   double m2 = 0.0;

@@ -6,7 +6,7 @@
 
 namespace emdae {
 
-std::vector<std::string> history_columns(int dim, bool external_work) {
+std::vector<std::string> history_columns(int dim, bool external_work, bool contact) {
   std::vector<std::string> c = {"t", "dt", "kinetic", "potential", "total_energy"};
   if (external_work) c.push_back("external_work");
   if (dim == 2) {
@@ -15,15 +15,18 @@ std::vector<std::string> history_columns(int dim, bool external_work) {
     c.insert(c.end(), {"Lx", "Ly", "Lz", "J", "Jx", "Jy", "Jz"});
   }
   c.insert(c.end(), {"phi_max", "newton_iterations", "cutbacks"});
+  if (contact)
+    c.insert(c.end(),
+             {"active_contacts", "contact_events", "gap_violation_max", "penetration_max"});
   return c;
 }
 
-HistoryWriter::HistoryWriter(const std::string& path, int dim, bool external_work)
-    : path_(path), dim_(dim), external_work_(external_work) {
+HistoryWriter::HistoryWriter(const std::string& path, int dim, bool external_work, bool contact)
+    : path_(path), dim_(dim), external_work_(external_work), contact_(contact) {
   file_ = std::fopen(path.c_str(), "w");
   if (!file_)
     throw std::runtime_error("cannot write history '" + path + "': " + std::strerror(errno));
-  const auto columns = history_columns(dim, external_work);
+  const auto columns = history_columns(dim, external_work, contact);
   for (std::size_t i = 0; i < columns.size(); ++i)
     std::fprintf(file_, "%s%s", i ? "," : "", columns[i].c_str());
   std::fputc('\n', file_);
@@ -48,7 +51,11 @@ void HistoryWriter::write(const Sample& s) {
     std::fprintf(file_, ",%.17g", q.angular_momentum.norm());
     for (int d = 0; d < 3; ++d) std::fprintf(file_, ",%.17g", q.angular_momentum[d]);
   }
-  std::fprintf(file_, ",%.17g,%d,%d\n", q.phi_max, s.newton_iterations, s.cutbacks);
+  std::fprintf(file_, ",%.17g,%d,%d", q.phi_max, s.newton_iterations, s.cutbacks);
+  if (contact_)
+    std::fprintf(file_, ",%d,%d,%.17g,%.17g", s.active_contacts, s.contact_events, s.gap_violation,
+                 s.penetration);
+  std::fputc('\n', file_);
   // Flushed per row: a killed run keeps its history up to the last step.
   if (std::fflush(file_) != 0)
     throw std::runtime_error("cannot write history '" + path_ + "': " + std::strerror(errno));

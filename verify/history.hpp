@@ -7,8 +7,11 @@
 //   3D: t,dt,kinetic,potential,total_energy,Lx,Ly,Lz,J,Jx,Jy,Jz,phi_max,
 //       newton_iterations,cutbacks
 // In 2D J is the (signed) out-of-plane angular momentum; in 3D J = |J| and
-// Jx, Jy, Jz its components. With an external-work hook a column
-// external_work follows total_energy.
+// Jx, Jy, Jz its components. With external loads (or an external-work hook)
+// a column external_work (cumulative W) follows total_energy. With contact
+// four columns end the row: active_contacts, contact_events (of the step
+// that led to the row), gap_violation_max (max |Phi| over the active
+// candidates) and penetration_max (max(0, -Phi) over the inactive ones).
 #pragma once
 
 #include <cstdio>
@@ -20,13 +23,13 @@
 namespace emdae {
 
 /// The header of history.csv for a system of dimension `dim`.
-std::vector<std::string> history_columns(int dim, bool external_work = false);
+std::vector<std::string> history_columns(int dim, bool external_work = false, bool contact = false);
 
 class HistoryWriter {
  public:
   /// Creates (truncates) `path` and writes the header; throws
   /// std::runtime_error naming the path and the reason when it cannot.
-  HistoryWriter(const std::string& path, int dim, bool external_work = false);
+  HistoryWriter(const std::string& path, int dim, bool external_work = false, bool contact = false);
   ~HistoryWriter();
   HistoryWriter(const HistoryWriter&) = delete;
   HistoryWriter& operator=(const HistoryWriter&) = delete;
@@ -43,6 +46,7 @@ class HistoryWriter {
   std::string path_;
   int dim_;
   bool external_work_;
+  bool contact_;
   std::FILE* file_ = nullptr;
   long rows_ = 0;
 };

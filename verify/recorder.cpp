@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <sstream>
 #include <utility>
 #include <vector>
 
@@ -15,8 +16,8 @@ std::string term_kind(const Term& term) {
   return d.substr(0, d.find(" ("));
 }
 
-std::string reason(const std::vector<std::string>& causes) {
-  std::string out = "not conserved: the system has";
+std::string reason(const std::vector<std::string>& causes, const char* what = "not conserved") {
+  std::string out = std::string(what) + ": the system has";
   for (std::size_t i = 0; i < causes.size(); ++i) out += (i ? ", " : " ") + causes[i];
   return out;
 }
@@ -45,20 +46,32 @@ double angular_momentum_scale(const System& system, const Vec& q, const Vec& v) 
 
 Conservation conservation_of(const System& system) {
   Conservation c;
-  const Symmetry s = system.symmetry();
-  c.linear = s.translation;
-  c.angular = s.rotation;
+  std::vector<std::string> linear_terms, angular_terms;
+  for (const auto* list : {&system.potentials(), &system.constraints()})
+    for (const auto& term : *list) {
+      const Symmetry t = term->symmetry();
+      if (!t.translation) add_unique(linear_terms, term_kind(*term) + " terms");
+      if (!t.rotation) add_unique(angular_terms, term_kind(*term) + " terms");
+    }
+  // Supports and loads break conservation but not the balance with their
+  // impulses; terms without the symmetry break both.
+  c.linear_balance = linear_terms.empty();
+  c.angular_balance = angular_terms.empty();
+  if (!c.linear_balance) c.linear_balance_reason = reason(linear_terms, "not balanced");
+  if (!c.angular_balance) c.angular_balance_reason = reason(angular_terms, "not balanced");
   std::vector<std::string> linear_causes, angular_causes;
   if (!system.prescribed().empty()) {
     linear_causes.push_back("fixed dofs");
     angular_causes.push_back("fixed dofs");
   }
-  for (const auto* list : {&system.potentials(), &system.constraints()})
-    for (const auto& term : *list) {
-      const Symmetry t = term->symmetry();
-      if (!t.translation) add_unique(linear_causes, term_kind(*term) + " terms");
-      if (!t.rotation) add_unique(angular_causes, term_kind(*term) + " terms");
-    }
+  if (!system.loads().empty()) {
+    linear_causes.push_back("external loads");
+    angular_causes.push_back("external loads");
+  }
+  linear_causes.insert(linear_causes.end(), linear_terms.begin(), linear_terms.end());
+  angular_causes.insert(angular_causes.end(), angular_terms.begin(), angular_terms.end());
+  c.linear = linear_causes.empty();
+  c.angular = angular_causes.empty();
   if (!c.linear) c.linear_reason = reason(linear_causes);
   if (!c.angular) c.angular_reason = reason(angular_causes);
   return c;
@@ -67,16 +80,21 @@ Conservation conservation_of(const System& system) {
 Recorder::Recorder(const System& system, const State& initial, ExternalWork external_work)
     : system_(system),
       external_work_(std::move(external_work)),
-      conservation_(conservation_of(system)) {
+      conservation_(conservation_of(system)),
+      has_loads_(!system.loads().empty()),
+      has_contact_(system.n_unilateral() > 0) {
   initial_.step = 0;
   initial_.t = initial.t;
   initial_.quantities = measure(system, initial.q, initial.v, initial.t);
   initial_.external_work = external_work_ ? external_work_(initial) : 0.0;
+  measure_contact(initial, initial_);
   const Quantities& q0 = initial_.quantities;
   energy_scale_ = std::max(std::abs(q0.total()), q0.kinetic + std::abs(q0.potential));
   const double j0 = q0.angular_momentum.norm();
   const double j_size = angular_momentum_scale(system, initial.q, initial.v);
   angular_scale_ = (j0 > 1e-12 * j_size) ? j0 : 0.0;
+  impulse_ = Vec::Zero(q0.linear_momentum.size());
+  angular_impulse_ = Vec::Zero(q0.angular_momentum.size());
   last_ = initial_;
   update_maxima(initial_);
 }
@@ -89,13 +107,84 @@ const Sample& Recorder::observe(const State& state, const AcceptedStep& step) {
   s.quantities = measure(system_, state.q, state.v, state.t);
   s.newton_iterations = step.stats.iterations;
   s.cutbacks = step.cutbacks;
-  s.external_work = external_work_ ? external_work_(state) : 0.0;
+  // The steppers report the work of the loads per step, exactly what enters
+  // their energy balance; a hook, when given, says it instead.
+  s.external_work =
+      external_work_ ? external_work_(state) : last_.external_work + step.stats.external_work;
+  s.contact_events = step.stats.contact_events;
+  measure_contact(state, s);
   newton_iterations_ += s.newton_iterations;
   newton_max_per_step_ = std::max(newton_max_per_step_, s.newton_iterations);
   cutbacks_ += s.cutbacks;
+  contact_events_ += s.contact_events;
+  track_load_free(last_, s);
+  track_balance(step, s);
   update_maxima(s);
   last_ = std::move(s);
   return last_;
+}
+
+void Recorder::measure_contact(const State& state, Sample& s) {
+  if (!has_contact_) return;
+  s.active_contacts = static_cast<int>(state.active.size());
+  std::vector<char> active(static_cast<std::size_t>(system_.n_unilateral()), 0);
+  for (int id : state.active) {
+    active[static_cast<std::size_t>(id)] = 1;
+    // +infinity: the candidate's function is gone (nothing opposite); not a violation.
+    const double phi = system_.unilateral_gap(id, state.q);
+    if (std::isfinite(phi) || std::isnan(phi)) keep_max(s.gap_violation, std::abs(phi));
+  }
+  for (int id = 0; id < system_.n_unilateral(); ++id) {
+    if (active[static_cast<std::size_t>(id)]) continue;
+    const double phi = system_.unilateral_gap(id, state.q);
+    if (std::isnan(phi) || phi < 0) keep_max(s.penetration, -phi);
+  }
+  if (s.active_contacts > 0) {
+    if (std::isnan(contact_first_)) contact_first_ = s.t;
+    contact_last_ = s.t;
+  }
+  active_max_ = std::max(active_max_, s.active_contacts);
+  keep_max(gap_violation_max_, s.gap_violation);
+  keep_max(penetration_max_, s.penetration);
+}
+
+void Recorder::track_load_free(const Sample& previous, const Sample& s) {
+  if (!has_loads_) return;
+  if (!load_free_ || !load_free_(previous.t, s.t)) {
+    in_free_ = false;
+    return;
+  }
+  // A new interval is measured from its own start: what the loads did
+  // before it is the balance's business, not an energy error.
+  if (!in_free_) {
+    in_free_ = true;
+    ++free_intervals_;
+    const Quantities& q = previous.quantities;
+    free_ref_ = q.total();
+    free_ref_scale_ = std::max(std::abs(q.total()), q.kinetic + std::abs(q.potential));
+    if (!(free_ref_scale_ > 0)) free_ref_scale_ = energy_scale_;
+  }
+  free_time_ += s.t - previous.t;
+  const double drift = std::abs(s.quantities.total() - free_ref_);
+  keep_max(free_error_max_, free_ref_scale_ > 0 ? drift / free_ref_scale_ : drift);
+}
+
+void Recorder::track_balance(const AcceptedStep& step, const Sample& s) {
+  const Quantities& q0 = initial_.quantities;
+  const Quantities& q = s.quantities;
+  const StepStats& st = step.stats;
+  if (st.external_impulse.size() == impulse_.size() &&
+      st.external_angular_impulse.size() == angular_impulse_.size()) {
+    impulse_ += st.external_impulse;
+    angular_impulse_ += st.external_angular_impulse;
+  } else if (has_loads_ || !system_.prescribed().empty()) {
+    // Without supports and loads the impulses are zero whether reported or not.
+    impulses_known_ = false;
+  }
+  keep_max(linear_balance_max_, (q.linear_momentum - q0.linear_momentum - impulse_).norm());
+  keep_max(angular_balance_max_,
+           (q.angular_momentum - q0.angular_momentum - angular_impulse_).norm());
+  angular_size_max_ = std::max(angular_size_max_, q.angular_momentum.norm());
 }
 
 void Recorder::update_maxima(const Sample& s) {
@@ -104,11 +193,36 @@ void Recorder::update_maxima(const Sample& s) {
   // The energy balance: what the loads put in since t_0 is not an error.
   const double drift =
       std::abs(q.total() - q0.total() - (s.external_work - initial_.external_work));
-  keep_max(energy_error_max_, energy_scale_ > 0 ? drift / energy_scale_ : drift);
+  keep_max(balance_error_max_, energy_scale_ > 0 ? drift / energy_scale_ : drift);
+  if (!has_loads_) energy_error_max_ = balance_error_max_;
   keep_max(linear_error_max_, (q.linear_momentum - q0.linear_momentum).norm());
   const double dj = (q.angular_momentum - q0.angular_momentum).norm();
   keep_max(angular_error_max_, angular_scale_ > 0 ? dj / angular_scale_ : dj);
   keep_max(constraint_max_, q.phi_max);
+  if (s.step == 0) angular_size_max_ = q.angular_momentum.norm();
+}
+
+double Recorder::energy_rel_error_max() const {
+  if (!has_loads_) return energy_error_max_;
+  return free_intervals_ > 0 ? free_error_max_ : balance_error_max_;
+}
+
+std::string Recorder::energy_note() const {
+  if (!has_loads_) return "";
+  if (free_intervals_ == 0)
+    return "no load-free interval: this is the energy balance error |H - H_0 - W| "
+           "(energy_balance_rel_error_max)";
+  std::ostringstream s;
+  s.precision(6);
+  s << "energy error over " << free_intervals_ << " load-free interval"
+    << (free_intervals_ > 1 ? "s" : "") << " (" << free_time_ << " of " << last_.t - initial_.t
+    << " time units), each from its start; with the loads on see energy_balance_rel_error_max";
+  return s.str();
+}
+
+std::optional<double> Recorder::energy_balance_rel_error_max() const {
+  if (!has_external_work()) return std::nullopt;
+  return balance_error_max_;
 }
 
 std::optional<double> Recorder::linear_momentum_error_max() const {
@@ -119,6 +233,33 @@ std::optional<double> Recorder::linear_momentum_error_max() const {
 std::optional<double> Recorder::angular_momentum_rel_error_max() const {
   if (!conservation_.angular) return std::nullopt;
   return angular_error_max_;
+}
+
+std::optional<double> Recorder::linear_momentum_balance_error_max() const {
+  if (!conservation_.linear_balance || !impulses_known_) return std::nullopt;
+  return linear_balance_max_;
+}
+
+std::optional<double> Recorder::angular_momentum_balance_rel_error_max() const {
+  if (!conservation_.angular_balance || !impulses_known_) return std::nullopt;
+  return angular_size_max_ > 0 ? angular_balance_max_ / angular_size_max_ : angular_balance_max_;
+}
+
+std::string Recorder::linear_balance_note() const {
+  if (!conservation_.linear_balance) return conservation_.linear_balance_reason;
+  if (!impulses_known_)
+    return "not available: the scheme does not report the impulses of loads "
+           "and supports";
+  return "";
+}
+
+std::string Recorder::angular_balance_note() const {
+  if (!conservation_.angular_balance) return conservation_.angular_balance_reason;
+  if (!impulses_known_)
+    return "not available: the scheme does not report the impulses of loads "
+           "and supports";
+  if (!(angular_size_max_ > 0)) return "absolute error: the angular momentum stayed zero";
+  return "";
 }
 
 }  // namespace emdae

@@ -3,23 +3,47 @@
 // The recorder measures the conserved quantities of every accepted step and
 // keeps their worst deviation from the initial state:
 //
-//   energy_rel_error_max           max |H_n - H_0 - W_n| / E_scale
+//   energy_rel_error_max           max |H_n - H_0 - W_n| / E_scale   (no loads)
 //   linear_momentum_error_max      max |L_n - L_0|             (absolute)
 //   angular_momentum_rel_error_max max |J_n - J_0| / |J_0|     (absolute when J_0 ~ 0)
 //   constraint_residual_max        max_n max_l |Phi_l(q_n)|
 //
 // with E_scale = max(|H_0|, T_0 + |V_0|): H_0 alone can vanish (a potential
 // whose datum cancels the kinetic energy) while the energy in play does not.
-// W_n is the work of external loads up to t_n, supplied by a hook; it is zero
-// for now (dead loads are potentials) and is where time-dependent loads will
-// enter the energy balance H_{n+1} - H_n = W_ext.
+//
+// External loads (System::loads()): W_n, the work they did up to t_n, is the
+// sum of StepStats::external_work (or a hook's value), and
+//
+//   energy_balance_rel_error_max   max |H_n - H_0 - (W_n - W_0)| / E_scale
+//   energy_rel_error_max           the energy error over load-free intervals
+//                                  only (steps over which every load's time
+//                                  function is zero, set_load_free_test()):
+//                                  max |H_n - H_a| / E_scale(a), a the start
+//                                  of the interval; the balance error when
+//                                  the run has no such interval.
 //
 // Momentum errors are only meaningful when the system has the symmetry that
-// conserves them (System::symmetry()); otherwise they are reported as absent,
-// with the reason.
+// conserves them (System::symmetry(), and no loads); otherwise they are
+// reported as absent, with the reason. Supports and loads do not break the
+// balance of momentum, though: with I_n, A_n the cumulative impulse of loads
+// and supports and its moment (StepStats::external_impulse, ...),
+//
+//   linear_momentum_balance_error_max      max |L_n - L_0 - I_n|
+//   angular_momentum_balance_rel_error_max max |J_n - J_0 - A_n| / max_k |J_k|
+//
+// are meaningful whenever the potential and constraint terms are invariant
+// (a supported bearing under a torque), provided the scheme reports the
+// impulses (em and midpoint do).
+//
+// Contact (systems with unilateral constraints), per sample: the active
+// candidates, the contact events of the step, max |Phi| over the active ones
+// (gap_violation) and the deepest penetration of an inactive one,
+// max(0, -min Phi); over the run their maxima, the events and the contact
+// window (first and last time with an active candidate).
 #pragma once
 
 #include <functional>
+#include <limits>
 #include <optional>
 #include <string>
 
@@ -36,7 +60,12 @@ struct Sample {
   Quantities quantities;
   int newton_iterations = 0;
   int cutbacks = 0;            // failed attempts before this step was accepted
-  double external_work = 0.0;  // cumulative W_ext(t); 0 without a hook
+  double external_work = 0.0;  // cumulative W_ext(t); 0 without loads or hook
+  // Contact (0 without unilateral constraints).
+  int active_contacts = 0;     // active candidates
+  int contact_events = 0;      // located impacts and releases in the step that led here
+  double gap_violation = 0.0;  // max |Phi| over the active candidates
+  double penetration = 0.0;    // max(0, -min Phi) over the inactive candidates
 };
 
 /// Which momentum maps the system conserves and, for those it does not, why.
@@ -45,6 +74,11 @@ struct Conservation {
   bool angular = true;
   std::string linear_reason;   // "not conserved: ..." when !linear
   std::string angular_reason;  // "not conserved: ..." when !angular
+  // Whether the momentum balance with the impulses of loads and supports is
+  // meaningful: every potential and constraint term has the symmetry.
+  bool linear_balance = true;
+  bool angular_balance = true;
+  std::string linear_balance_reason, angular_balance_reason;
 };
 
 Conservation conservation_of(const System& system);
@@ -58,18 +92,50 @@ class Recorder {
 
   Recorder(const System& system, const State& initial, ExternalWork external_work = {});
 
+  /// Whether every load vanishes on [a, b] (a step over which the energy
+  /// must be conserved). Set before the first observe(); without it a system
+  /// with loads has no load-free interval.
+  using LoadFreeTest = std::function<bool(double a, double b)>;
+  void set_load_free_test(LoadFreeTest test) { load_free_ = std::move(test); }
+
   /// Measures an accepted step and updates the maxima; returns its sample.
   const Sample& observe(const State& state, const AcceptedStep& step);
 
   const Sample& initial() const { return initial_; }
   const Sample& last() const { return last_; }
   const Conservation& conservation() const { return conservation_; }
-  bool has_external_work() const { return static_cast<bool>(external_work_); }
+  bool has_external_work() const { return static_cast<bool>(external_work_) || has_loads_; }
+  bool has_contact() const { return has_contact_; }
 
-  /// Relative unless the initial energy scale is zero (then absolute).
-  double energy_rel_error_max() const { return energy_error_max_; }
+  /// Relative unless the initial energy scale is zero (then absolute). With
+  /// loads: over the load-free intervals (see energy_note()).
+  double energy_rel_error_max() const;
   bool energy_error_is_relative() const { return energy_scale_ > 0.0; }
   double energy_scale() const { return energy_scale_; }
+  /// What energy_rel_error_max measures when the system has loads; empty
+  /// without loads.
+  std::string energy_note() const;
+  /// |H_n - H_0 - W_n| / E_scale; empty without loads or work hook.
+  std::optional<double> energy_balance_rel_error_max() const;
+  /// Load-free intervals seen and the time they cover.
+  int load_free_intervals() const { return free_intervals_; }
+  double load_free_time() const { return free_time_; }
+
+  /// Momentum balance with the impulses of loads and supports; empty when
+  /// not meaningful (balance_note() says why).
+  std::optional<double> linear_momentum_balance_error_max() const;
+  std::optional<double> angular_momentum_balance_rel_error_max() const;
+  std::string linear_balance_note() const;
+  std::string angular_balance_note() const;
+
+  /// Contact over the run (zero / NaN without contact or before any).
+  int active_contacts_max() const { return active_max_; }
+  double gap_violation_max() const { return gap_violation_max_; }
+  double penetration_max() const { return penetration_max_; }
+  long contact_events() const { return contact_events_; }
+  /// First and last time with an active candidate; NaN when there was none.
+  double contact_first() const { return contact_first_; }
+  double contact_last() const { return contact_last_; }
 
   /// Empty when the system does not conserve the quantity.
   std::optional<double> linear_momentum_error_max() const;
@@ -86,14 +152,35 @@ class Recorder {
 
  private:
   void update_maxima(const Sample& s);
+  void measure_contact(const State& state, Sample& s);
+  void track_load_free(const Sample& previous, const Sample& s);
+  void track_balance(const AcceptedStep& step, const Sample& s);
 
   const System& system_;
   ExternalWork external_work_;
+  LoadFreeTest load_free_;
   Conservation conservation_;
   Sample initial_, last_;
+  bool has_loads_ = false, has_contact_ = false;
   double energy_scale_ = 0.0;   // 0: report the absolute energy error
   double angular_scale_ = 0.0;  // 0: report the absolute angular momentum error
   double energy_error_max_ = 0.0;
+  double balance_error_max_ = 0.0;
+  // Load-free intervals: the one in progress starts at energy free_ref_.
+  bool in_free_ = false;
+  double free_ref_ = 0.0, free_ref_scale_ = 0.0;
+  int free_intervals_ = 0;
+  double free_time_ = 0.0, free_error_max_ = 0.0;
+  // Cumulative impulses of loads and supports and their moment.
+  Vec impulse_, angular_impulse_;
+  bool impulses_known_ = true;
+  double linear_balance_max_ = 0.0, angular_balance_max_ = 0.0, angular_size_max_ = 0.0;
+  // Contact.
+  int active_max_ = 0;
+  double gap_violation_max_ = 0.0, penetration_max_ = 0.0;
+  long contact_events_ = 0;
+  double contact_first_ = std::numeric_limits<double>::quiet_NaN();
+  double contact_last_ = std::numeric_limits<double>::quiet_NaN();
   double linear_error_max_ = 0.0;
   double angular_error_max_ = 0.0;
   double constraint_max_ = 0.0;

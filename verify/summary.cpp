@@ -3,6 +3,7 @@
 #include <unistd.h>
 
 #include <cerrno>
+#include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <fstream>
@@ -49,27 +50,65 @@ Summary summarize(const RunInfo& info, const System& system, const Recorder& rec
   s.energy_initial = recorder.initial().quantities.total();
   s.energy_rel_error_max = recorder.energy_rel_error_max();
   s.energy_error_relative = recorder.energy_error_is_relative();
+  s.energy_note = recorder.energy_note();
+  s.energy_balance_rel_error_max = recorder.energy_balance_rel_error_max();
+  s.external_work = recorder.last().external_work - recorder.initial().external_work;
   s.linear_momentum_error_max = recorder.linear_momentum_error_max();
   s.linear_momentum_note = recorder.conservation().linear_reason;
   s.angular_momentum_rel_error_max = recorder.angular_momentum_rel_error_max();
   s.angular_momentum_note = recorder.conservation().angular_reason;
   if (s.angular_momentum_rel_error_max && !recorder.angular_momentum_error_is_relative())
     s.angular_momentum_note = "absolute error: initial angular momentum is zero";
+  s.linear_momentum_balance_error_max = recorder.linear_momentum_balance_error_max();
+  s.linear_momentum_balance_note = recorder.linear_balance_note();
+  s.angular_momentum_balance_rel_error_max = recorder.angular_momentum_balance_rel_error_max();
+  s.angular_momentum_balance_note = recorder.angular_balance_note();
   s.constraint_residual_max = recorder.constraint_residual_max();
+  if (recorder.has_contact()) {
+    ContactFigures c;
+    if (!std::isnan(recorder.contact_first())) {
+      c.first = recorder.contact_first();
+      c.last = recorder.contact_last();
+    }
+    c.active_contacts_max = recorder.active_contacts_max();
+    c.gap_violation_max = recorder.gap_violation_max();
+    c.penetration_max = recorder.penetration_max();
+    c.contact_events = recorder.contact_events();
+    s.contact = c;
+  }
+  s.statics = info.statics;
   s.status = info.status;
   s.dofs = system.n_dofs();
   s.free_dofs = system.n_dofs() - static_cast<int>(system.prescribed().size());
   s.constraints = system.n_constraints();
   if (tolerances.energy_rel)
     s.checks.push_back(make_check("energy_rel", s.energy_rel_error_max, *tolerances.energy_rel));
+  if (tolerances.energy_balance_rel)
+    s.checks.push_back(make_check("energy_balance_rel", s.energy_balance_rel_error_max,
+                                  *tolerances.energy_balance_rel));
   if (tolerances.linear_momentum)
     s.checks.push_back(
         make_check("linear_momentum", s.linear_momentum_error_max, *tolerances.linear_momentum));
   if (tolerances.angular_momentum_rel)
     s.checks.push_back(make_check("angular_momentum_rel", s.angular_momentum_rel_error_max,
                                   *tolerances.angular_momentum_rel));
+  if (tolerances.angular_momentum_balance_rel)
+    s.checks.push_back(make_check("angular_momentum_balance_rel",
+                                  s.angular_momentum_balance_rel_error_max,
+                                  *tolerances.angular_momentum_balance_rel));
   if (tolerances.constraint)
     s.checks.push_back(make_check("constraint", s.constraint_residual_max, *tolerances.constraint));
+  const auto contact_figure = [&](double ContactFigures::*figure) -> std::optional<double> {
+    if (!s.contact) return std::nullopt;
+    return (*s.contact).*figure;
+  };
+  if (tolerances.gap_violation)
+    s.checks.push_back(make_check("gap_violation",
+                                  contact_figure(&ContactFigures::gap_violation_max),
+                                  *tolerances.gap_violation));
+  if (tolerances.penetration)
+    s.checks.push_back(make_check("penetration", contact_figure(&ContactFigures::penetration_max),
+                                  *tolerances.penetration));
   return s;
 }
 
@@ -89,12 +128,48 @@ nlohmann::ordered_json to_json(const Summary& s) {
   j["cpu_seconds"] = s.cpu_seconds;
   j["energy_initial"] = s.energy_initial;
   j["energy_rel_error_max"] = s.energy_rel_error_max;
-  if (!s.energy_error_relative) j["energy_note"] = "absolute error: initial energy scale is zero";
+  std::string energy_note = s.energy_note;
+  if (!s.energy_error_relative)
+    energy_note = "absolute error: initial energy scale is zero" +
+                  (energy_note.empty() ? "" : "; " + energy_note);
+  if (!energy_note.empty()) j["energy_note"] = energy_note;
+  if (s.energy_balance_rel_error_max) {
+    j["energy_balance_rel_error_max"] = *s.energy_balance_rel_error_max;
+    j["external_work"] = s.external_work;
+  }
   j["linear_momentum_error_max"] = optional_number(s.linear_momentum_error_max);
   if (!s.linear_momentum_note.empty()) j["linear_momentum_note"] = s.linear_momentum_note;
   j["angular_momentum_rel_error_max"] = optional_number(s.angular_momentum_rel_error_max);
   if (!s.angular_momentum_note.empty()) j["angular_momentum_note"] = s.angular_momentum_note;
+  j["linear_momentum_balance_error_max"] = optional_number(s.linear_momentum_balance_error_max);
+  if (!s.linear_momentum_balance_note.empty())
+    j["linear_momentum_balance_note"] = s.linear_momentum_balance_note;
+  j["angular_momentum_balance_rel_error_max"] =
+      optional_number(s.angular_momentum_balance_rel_error_max);
+  if (!s.angular_momentum_balance_note.empty())
+    j["angular_momentum_balance_note"] = s.angular_momentum_balance_note;
   j["constraint_residual_max"] = s.constraint_residual_max;
+  if (s.contact) {
+    const ContactFigures& c = *s.contact;
+    j["contact_window"] = c.first ? nlohmann::ordered_json::array({*c.first, *c.last})
+                                  : nlohmann::ordered_json(nullptr);
+    j["active_contacts_max"] = c.active_contacts_max;
+    j["gap_violation_max"] = c.gap_violation_max;
+    j["penetration_max"] = c.penetration_max;
+    j["contact_events"] = c.contact_events;
+  }
+  if (s.statics) {
+    const StaticsOutcome& st = *s.statics;
+    j["statics"] = {{"converged", st.converged},
+                    {"steps", st.steps},
+                    {"newton_iterations", st.newton_iterations},
+                    {"change", st.change},
+                    {"holds", st.holds},
+                    {"holding_moments", st.holding_moments},
+                    {"active_contacts", st.active_contacts},
+                    {"cpu_seconds", st.cpu_seconds},
+                    {"message", st.message}};
+  }
   j["status"] = s.status;
   j["dofs"] = s.dofs;
   j["free_dofs"] = s.free_dofs;

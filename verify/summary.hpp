@@ -20,10 +20,39 @@ namespace emdae {
 /// Optional thresholds on the figures of a run.
 struct Tolerances {
   std::optional<double> energy_rel;
+  std::optional<double> energy_balance_rel;
   std::optional<double> linear_momentum;
   std::optional<double> angular_momentum_rel;
+  std::optional<double> angular_momentum_balance_rel;
   std::optional<double> constraint;
-  bool any() const { return energy_rel || linear_momentum || angular_momentum_rel || constraint; }
+  std::optional<double> gap_violation;
+  std::optional<double> penetration;
+  bool any() const {
+    return energy_rel || energy_balance_rel || linear_momentum || angular_momentum_rel ||
+           angular_momentum_balance_rel || constraint || gap_violation || penetration;
+  }
+};
+
+/// The outcome of a scene's [statics] solve, run before the dynamics.
+struct StaticsOutcome {
+  bool converged = false;
+  int steps = 0;
+  long newton_iterations = 0;
+  double change = 0.0;                  // last max |q_k+1 - q_k|
+  std::vector<std::string> holds;       // node sets whose rotation was held
+  std::vector<double> holding_moments;  // the moments that took, one per hold
+  int active_contacts = 0;              // active candidates at equilibrium
+  double cpu_seconds = 0.0;             // not part of the run's cpu_seconds
+  std::string message;
+};
+
+/// Contact figures of a run (systems with unilateral constraints).
+struct ContactFigures {
+  std::optional<double> first, last;  // the contact window; empty: no contact
+  int active_contacts_max = 0;
+  double gap_violation_max = 0.0;  // max |Phi| over active candidates
+  double penetration_max = 0.0;    // max(0, -Phi) over inactive candidates
+  long contact_events = 0;
 };
 
 struct Check {
@@ -45,11 +74,20 @@ struct Summary {
   double energy_initial = 0.0;
   double energy_rel_error_max = 0.0;
   bool energy_error_relative = true;
+  std::string energy_note;  // what energy_rel_error_max measures with loads
+  std::optional<double> energy_balance_rel_error_max;  // with loads
+  double external_work = 0.0;                          // W over the run
   std::optional<double> linear_momentum_error_max;
   std::string linear_momentum_note;
   std::optional<double> angular_momentum_rel_error_max;
   std::string angular_momentum_note;
+  std::optional<double> linear_momentum_balance_error_max;
+  std::string linear_momentum_balance_note;
+  std::optional<double> angular_momentum_balance_rel_error_max;
+  std::string angular_momentum_balance_note;
   double constraint_residual_max = 0.0;
+  std::optional<ContactFigures> contact;  // with unilateral constraints
+  std::optional<StaticsOutcome> statics;
   std::string status;  // "ok" or what failed
   int dofs = 0, free_dofs = 0, constraints = 0;
   std::vector<Check> checks;
@@ -64,6 +102,7 @@ struct RunInfo {
   double dt = 0.0, t_end = 0.0;
   double cpu_seconds = 0.0;
   std::string status = "ok";
+  std::optional<StaticsOutcome> statics;  // when the scene ran [statics]
 };
 
 Summary summarize(const RunInfo& info, const System& system, const Recorder& recorder,

@@ -1,0 +1,431 @@
+// The verification report (report.html), the comparison (compare.html), the
+// VTU fields and the progress display: run as users run them (the built
+// executable through a shell), read back by the programs users read them
+// with (headless Chromium, meshio).
+//
+// Chromium and meshio are optional on a developer's machine: without them
+// the tests that need them are skipped with a message saying what to install
+// (scripts/install-deps.sh installs both).
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <Eigen/Dense>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "core/material.hpp"
+#include "core/mesh.hpp"
+#include "core/system.hpp"
+#include "integrators/stepper.hpp"
+#include "verify/vtu.hpp"
+
+namespace emdae {
+namespace {
+
+namespace fs = std::filesystem;
+
+const std::string kExe = EMDAE_EXE;
+const char* kChromium = "/usr/bin/chromium";
+
+std::string example(const std::string& name) {
+  return std::string(EMDAE_EXAMPLES_DIR) + "/" + name + ".toml";
+}
+
+std::string quote(const std::string& s) {
+  std::string out = "'";
+  for (char c : s) out += (c == '\'') ? std::string("'\\''") : std::string(1, c);
+  return out + "'";
+}
+
+struct Result {
+  int code = -1;
+  std::string output;  // stdout and stderr together
+};
+
+// Runs a shell command, capturing stdout and stderr together.
+Result shell(const std::string& cmd) {
+  Result r;
+  FILE* pipe = ::popen((cmd + " 2>&1").c_str(), "r");
+  if (!pipe) return r;
+  char buffer[4096];
+  std::size_t n;
+  while ((n = std::fread(buffer, 1, sizeof buffer, pipe)) > 0) r.output.append(buffer, n);
+  const int status = ::pclose(pipe);
+  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  return r;
+}
+
+Result emdae(const std::string& args, const std::string& env = "") {
+  return shell(env + (env.empty() ? "" : " ") + quote(kExe) + " " + args);
+}
+
+class TempDir {
+ public:
+  TempDir() {
+    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+    // The process id keeps concurrent runs (two build trees) apart.
+    std::string name = std::string("emdae_report_") + std::to_string(::getpid()) + "_" +
+                       info->test_suite_name() + "_" + info->name();
+    for (char& c : name)
+      if (c == '/') c = '_';
+    path_ = fs::temp_directory_path() / name;
+    fs::remove_all(path_);
+    fs::create_directories(path_);
+  }
+  ~TempDir() {
+    std::error_code ec;
+    fs::remove_all(path_, ec);
+  }
+  const fs::path& path() const { return path_; }
+  std::string operator/(const std::string& p) const { return (path_ / p).string(); }
+
+ private:
+  fs::path path_;
+};
+
+std::string read_text(const fs::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::ostringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+int count(const std::string& text, const std::string& what) {
+  int n = 0;
+  for (auto p = text.find(what); p != std::string::npos; p = text.find(what, p + what.size())) ++n;
+  return n;
+}
+
+bool have_gnuplot() {
+  return shell("gnuplot --version").code == 0;
+}
+
+// The Python that has meshio (Debian's python3-meshio), or "" when none.
+std::string python_with_meshio() {
+  for (const char* python : {"/usr/bin/python3", "python3"})
+    if (shell(std::string(python) + " -c 'import meshio'").code == 0) return python;
+  return "";
+}
+
+// Headless Chromium without the profile, network and update machinery a
+// test has no use for; the user data folder is the test's own.
+std::string chromium(const TempDir& dir) {
+  return std::string(kChromium) +
+         " --headless --no-sandbox --disable-gpu --disable-quic --no-first-run"
+         " --disable-background-networking --disable-component-update --disable-sync"
+         " --disable-dev-shm-usage --user-data-dir=" +
+         quote(dir / "chromium-profile");
+}
+
+// A short double pendulum run: 100 steps are plenty for the plots.
+std::string pendulum_run(const std::string& out, const std::string& extra = "") {
+  return quote(example("double_pendulum")) + " --t-end 1 --quiet --out " + quote(out) +
+         (extra.empty() ? "" : " " + extra);
+}
+
+// --- report.html -------------------------------------------------------------------
+
+TEST(Report, RunWritesSelfContainedReportWithPlotsAndMarks) {
+  if (!have_gnuplot()) GTEST_SKIP() << "gnuplot is not installed (apt-get install gnuplot-nox)";
+  TempDir dir;
+  const Result r = emdae("run " + pendulum_run(dir / "run"));
+  ASSERT_EQ(r.code, 0) << r.output;
+  const fs::path report = dir.path() / "run" / "report.html";
+  ASSERT_TRUE(fs::exists(report));
+  const std::string html = read_text(report);
+  // What ran, and its verdicts.
+  for (const char* s :
+       {"<!DOCTYPE html>", "double_pendulum", "planar double pendulum on rigid links in gravity",
+        "<code>em</code>", "time step dt", "Newton", "energy_rel_error_max",
+        "constraint_residual_max", "Energy error", "Constraint residual", "Newton iterations"})
+    EXPECT_NE(html.find(s), std::string::npos) << s;
+  // energy_rel and constraint are declared by the scene: two pass marks in
+  // the checks table (plus the overall verdict).
+  EXPECT_GE(count(html, "class=\"mark pass\""), 3);
+  EXPECT_EQ(count(html, "class=\"mark fail\""), 0);
+  // Momenta are not conserved by a pendulum: said in place of the plots.
+  EXPECT_NE(html.find("not conserved: the system has"), std::string::npos);
+  // Plots: energy, energy error, constraint, Newton; inline SVG with curves.
+  EXPECT_GE(count(html, "<svg"), 4);
+  EXPECT_GE(count(html, "<path"), 20);
+  EXPECT_EQ(html.find("plot not drawn"), std::string::npos);
+  // Self-contained: nothing fetched, nothing run.
+  EXPECT_EQ(html.find("<script"), std::string::npos);
+  EXPECT_EQ(html.find("src=\"http"), std::string::npos);
+  EXPECT_EQ(html.find("<link"), std::string::npos);
+  // Written atomically: no temporary file is left behind.
+  for (const auto& e : fs::directory_iterator(dir.path() / "run"))
+    EXPECT_EQ(e.path().string().find(".tmp"), std::string::npos) << e.path();
+}
+
+TEST(Report, FailedToleranceIsMarked) {
+  TempDir dir;
+  const Result r = emdae("run " + pendulum_run(dir / "run", "--set tolerances.energy_rel=1e-30"));
+  EXPECT_EQ(r.code, 4) << r.output;
+  const std::string html = read_text(dir.path() / "run" / "report.html");
+  EXPECT_GE(count(html, "class=\"mark fail\""), 2);  // the check and the verdict
+  EXPECT_NE(html.find("a declared tolerance is exceeded"), std::string::npos);
+}
+
+TEST(Report, WithoutGnuplotTheReportSaysSoAndTheRunSucceeds) {
+  TempDir dir;
+  const Result r = emdae("run " + pendulum_run(dir / "run"), "EMDAE_GNUPLOT=/nonexistent/gnuplot");
+  ASSERT_EQ(r.code, 0) << r.output;
+  const std::string html = read_text(dir.path() / "run" / "report.html");
+  EXPECT_NE(html.find("gnuplot is not available"), std::string::npos);
+  EXPECT_EQ(count(html, "<svg"), 0);
+  // The rest of the report is there.
+  EXPECT_GE(count(html, "class=\"mark pass\""), 2);
+  EXPECT_NE(html.find("energy_rel_error_max"), std::string::npos);
+}
+
+TEST(Report, ChromiumRendersThePlots) {
+  if (!fs::exists(kChromium)) GTEST_SKIP() << kChromium << " is absent (apt-get install chromium)";
+  if (!have_gnuplot()) GTEST_SKIP() << "gnuplot is not installed (apt-get install gnuplot-nox)";
+  TempDir dir;
+  ASSERT_EQ(emdae("run " + pendulum_run(dir / "run")).code, 0);
+  const std::string url = "file://" + (dir.path() / "run" / "report.html").string();
+
+  // The DOM after parsing: the inline SVGs and their curves are elements.
+  const Result dom = shell(chromium(dir) + " --dump-dom " + quote(url) + " 2>/dev/null");
+  ASSERT_EQ(dom.code, 0) << dom.output.substr(0, 2000);
+  EXPECT_GE(count(dom.output, "<svg"), 4);
+  EXPECT_GE(count(dom.output, "<path") + count(dom.output, "<polyline"), 20);
+  EXPECT_NE(dom.output.find("double_pendulum"), std::string::npos);
+
+  const std::string png = dir / "report.png";
+  const Result shot = shell(chromium(dir) +
+                            " --hide-scrollbars --window-size=1280,2000"
+                            " --screenshot=" +
+                            quote(png) + " " + quote(url));
+  ASSERT_EQ(shot.code, 0) << shot.output;
+  const std::string image = read_text(png);
+  ASSERT_GT(image.size(), 10000u);  // a page of plots, not a blank one
+  EXPECT_EQ(image.substr(1, 3), "PNG");
+}
+
+// --- compare ----------------------------------------------------------------------------
+
+TEST(Compare, EmAndMidpointSideBySide) {
+  TempDir dir;
+  const std::string out = dir / "cmp";
+  const Result r = emdae("compare " + quote(example("double_pendulum")) +
+                         " --schemes em,midpoint --t-end 1 --quiet --out " + quote(out));
+  // The midpoint rule does not conserve the pendulum's energy to 1e-8: a
+  // failed check (4) is its expected verdict, not an error of compare.
+  ASSERT_TRUE(r.code == 0 || r.code == 4) << r.code << "\n" << r.output;
+  for (const char* scheme : {"em", "midpoint"}) {
+    EXPECT_TRUE(fs::exists(fs::path(out) / scheme / "report.html")) << scheme;
+    EXPECT_TRUE(fs::exists(fs::path(out) / scheme / "summary.json")) << scheme;
+  }
+  const std::string html = read_text(fs::path(out) / "compare.html");
+  ASSERT_FALSE(html.empty());
+  // Both schemes in the table, each linked to its report.
+  EXPECT_NE(html.find("<a href=\"em/report.html\"><code>em</code></a>"), std::string::npos);
+  EXPECT_NE(html.find("<a href=\"midpoint/report.html\"><code>midpoint</code></a>"),
+            std::string::npos);
+  EXPECT_GE(count(html, "<span class=\"status ok\">ok</span>"), 2);
+  if (have_gnuplot()) {
+    // Energy error, constraint residual, Newton iterations: one line per scheme.
+    EXPECT_GE(count(html, "<svg"), 3);
+    EXPECT_NE(html.find("<title>Energy error</title>"), std::string::npos);
+  }
+}
+
+TEST(Compare, UnknownSchemeIsBadInputAndNothingRuns) {
+  TempDir dir;
+  const Result r = emdae("compare " + quote(example("double_pendulum")) +
+                         " --schemes em,leapfrog --out " + quote(dir / "cmp"));
+  EXPECT_EQ(r.code, 2) << r.output;
+  EXPECT_NE(r.output.find("unknown scheme 'leapfrog'"), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(dir / "cmp"));
+}
+
+TEST(Compare, RefusingSchemeIsShownAndTheOthersStillRun) {
+  // IDA refuses contact; the ring impact has it. 5 steps end before impact.
+  if (!fs::exists(example("ring_impact"))) GTEST_SKIP() << "examples/ring_impact.toml is absent";
+  TempDir dir;
+  const std::string out = dir / "cmp";
+  const Result r = emdae("compare " + quote(example("ring_impact")) +
+                         " --schemes ida,em --t-end 0.05 --quiet --out " + quote(out));
+  EXPECT_EQ(r.code, 3) << r.output;  // a refused scheme counts as a failed run
+  EXPECT_NE(r.output.find("ida"), std::string::npos) << r.output;
+  EXPECT_TRUE(fs::exists(fs::path(out) / "em" / "report.html"));
+  EXPECT_FALSE(fs::exists(fs::path(out) / "ida" / "summary.json"));
+  const std::string html = read_text(fs::path(out) / "compare.html");
+  EXPECT_NE(html.find("<code>ida</code>"), std::string::npos);
+  EXPECT_NE(html.find("did not run"), std::string::npos);
+  EXPECT_NE(html.find("contact"), std::string::npos);
+  EXPECT_NE(html.find("<a href=\"em/report.html\"><code>em</code></a>"), std::string::npos);
+}
+
+// --- progress -----------------------------------------------------------------------------
+
+TEST(Progress, QuietRunPrintsNothing) {
+  TempDir dir;
+  const Result r = emdae("run " + pendulum_run(dir / "run"));
+  EXPECT_EQ(r.code, 0);
+  EXPECT_TRUE(r.output.empty()) << r.output;
+}
+
+TEST(Progress, OnATerminalOneLineIsRedrawn) {
+  if (shell("command -v script").code != 0)
+    GTEST_SKIP() << "script(1) is not available to give the run a terminal";
+  TempDir dir;
+  // script(1) runs the command on a pseudo-terminal: stderr is a tty. 50000
+  // steps (about a second) give the bar, redrawn every 0.1 s, time to show.
+  const std::string cmd = quote(kExe) + " run " + quote(example("double_pendulum")) +
+                          " --dt 0.001 --t-end 50 --set output.every=100 --out " +
+                          quote(dir / "run");
+  const Result r = shell("TERM=xterm script -qec " + quote(cmd) + " /dev/null");
+  EXPECT_EQ(r.code, 0) << r.output;
+  EXPECT_NE(r.output.find('\r'), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("%  t = "), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find(" left"), std::string::npos) << r.output;
+  // The summary table follows on lines of its own.
+  EXPECT_NE(r.output.find("energy rel. error"), std::string::npos) << r.output;
+}
+
+// --- VTU fields ---------------------------------------------------------------------------
+
+// Two bodies, a ring and a rectangle, under a homogeneous stretch
+// x = F X + c: every element has the same, known stress.
+TEST(Vtu, FieldsReadBackThroughMeshio) {
+  const std::string python = python_with_meshio();
+  if (python.empty()) GTEST_SKIP() << "meshio is not installed (apt-get install python3-meshio)";
+  TempDir dir;
+  System sys(2);
+  const Material steel = make_material(MaterialModel::SaintVenantKirchhoff, 200.0, 0.3, 1.0);
+  const Mesh ring = ring_mesh({0.0, 0.0}, 1.0, 1.5, 16, 2);
+  const Mesh block = rectangle_mesh({3.0, 0.0}, 2.0, 1.0, 4, 2);
+  BodyOptions moving;
+  moving.velocity = Eigen::Vector2d(0.5, -0.25);
+  const BodyInfo a = add_body(sys, ring, steel, moving);
+  const BodyInfo b = add_body(sys, block, steel);
+  State state = initial_state(sys);
+  Eigen::Matrix2d f;
+  f << 1.1, 0.0, 0.0, 0.95;
+  for (int n = 0; n < sys.n_nodes(); ++n)
+    state.q.segment<2>(2 * n) = f * state.q.segment<2>(2 * n) + Eigen::Vector2d(0.1, 0.2);
+  state.t = 0.25;
+
+  FieldWriter writer(dir.path().string(), {{"ring", ring, a.node_offset, steel},
+                                           {"block", block, b.node_offset, steel}});
+  State start = initial_state(sys);
+  writer.write(start, 0);
+  writer.write(state, 7);
+  writer.close();
+  ASSERT_TRUE(fs::exists(dir / "fields.pvd"));
+  const std::string vtu = (dir.path() / FieldWriter::file_name(7)).string();
+  ASSERT_TRUE(fs::exists(vtu));
+
+  // The expected stress of the homogeneous stretch, St. Venant-Kirchhoff.
+  const Eigen::Matrix2d e = 0.5 * (f.transpose() * f - Eigen::Matrix2d::Identity());
+  const Eigen::Matrix2d s =
+      steel.lambda * e.trace() * Eigen::Matrix2d::Identity() + 2 * steel.mu * e;
+  const Eigen::Matrix2d sigma = f * s * f.transpose() / f.determinant();
+
+  const int n_points = ring.n_nodes() + block.n_nodes();
+  const int n_cells = ring.n_elements() + block.n_elements();
+  std::ostringstream script;
+  script.precision(17);
+  script << "import meshio, numpy as np, xml.etree.ElementTree as ET\n"
+         << "m = meshio.read('" << vtu << "')\n"
+         << "assert len(m.points) == " << n_points << ", len(m.points)\n"
+         << "assert sum(len(c.data) for c in m.cells) == " << n_cells << "\n"
+         << "assert all(c.type == 'quad' for c in m.cells)\n"
+         << "for k in ('displacement', 'velocity', 'reference_position'):\n"
+         << "    assert m.point_data[k].shape == (" << n_points << ", 3), k\n"
+         << "X = m.point_data['reference_position'][:, :2]\n"
+         << "F = np.array([[1.1, 0], [0, 0.95]])\n"
+         << "assert np.allclose(m.points[:, :2], X @ F.T + [0.1, 0.2])\n"
+         << "assert np.allclose(m.point_data['displacement'][:, :2], m.points[:, :2] - X)\n"
+         << "v = m.point_data['velocity']\n"
+         << "assert np.allclose(v[:" << ring.n_nodes() << ", :2], [0.5, -0.25])\n"
+         << "assert np.allclose(v[" << ring.n_nodes() << ":], 0)\n"
+         << "S = np.concatenate(m.cell_data['second_piola_kirchhoff'])\n"
+         << "C = np.concatenate(m.cell_data['cauchy_stress'])\n"
+         << "assert S.shape == (" << n_cells << ", 3)\n"
+         << "assert np.allclose(S, [" << s(0, 0) << ", " << s(1, 1) << ", " << s(0, 1)
+         << "], rtol=1e-9, atol=1e-9), S[:3]\n"
+         << "assert np.allclose(C, [" << sigma(0, 0) << ", " << sigma(1, 1) << ", " << sigma(0, 1)
+         << "], rtol=1e-9, atol=1e-9), C[:3]\n"
+         << "body = np.concatenate(m.cell_data['body'])\n"
+         << "assert (body[:" << ring.n_elements() << "] == 0).all() and (body[" << ring.n_elements()
+         << ":] == 1).all()\n"
+         << "pvd = ET.parse('" << (dir / "fields.pvd") << "').getroot()\n"
+         << "sets = pvd.findall('./Collection/DataSet')\n"
+         << "assert [float(d.get('timestep')) for d in sets] == [0.0, 0.25], sets\n"
+         << "assert sets[1].get('file') == 'fields/step_0000007.vtu'\n"
+         << "print('ok')\n";
+  std::ofstream(dir / "check.py") << script.str();
+  const Result r = shell(python + " " + quote(dir / "check.py"));
+  EXPECT_EQ(r.code, 0) << r.output;
+  EXPECT_NE(r.output.find("ok"), std::string::npos) << r.output;
+}
+
+// A scene with a body: fields every 5 steps, and the last, read back.
+TEST(Vtu, RunOfASceneWithABodyWritesFieldsAndIndex) {
+  if (!fs::exists(example("free_ring"))) GTEST_SKIP() << "examples/free_ring.toml is absent";
+  const std::string python = python_with_meshio();
+  if (python.empty()) GTEST_SKIP() << "meshio is not installed (apt-get install python3-meshio)";
+  TempDir dir;
+  const std::string out = dir / "run";
+  // dt = 0.03: 11 steps to t = 0.33, fields at steps 0, 5, 10 and 11.
+  const Result r = emdae("run " + quote(example("free_ring")) +
+                         " --t-end 0.33 --set output.vtu_every=5 --quiet --out " + quote(out));
+  ASSERT_EQ(r.code, 0) << r.output;
+  for (const char* step : {"0000000", "0000005", "0000010", "0000011"})
+    EXPECT_TRUE(fs::exists(fs::path(out) / "fields" / ("step_" + std::string(step) + ".vtu")))
+        << step;
+  EXPECT_FALSE(fs::exists(fs::path(out) / "fields" / "step_0000001.vtu"));
+  EXPECT_NE(read_text(fs::path(out) / "report.html").find("fields.pvd"), std::string::npos);
+  const std::string script =
+      "import meshio, numpy as np, xml.etree.ElementTree as ET\n"
+      "m = meshio.read('" +
+      out +
+      "/fields/step_0000011.vtu')\n"
+      "assert len(m.points) == 128 and len(m.cells[0].data) == 64\n"
+      "u = m.point_data['displacement']\n"
+      "assert np.linalg.norm(u[:, :2], axis=1).max() > 0.5  # it moved, at speed 3\n"
+      "assert set(m.cell_data) >= {'second_piola_kirchhoff', 'cauchy_stress', 'det_F'}\n"
+      "sets = ET.parse('" +
+      out +
+      "/fields.pvd').getroot().findall('./Collection/DataSet')\n"
+      "assert len(sets) == 4, len(sets)\n"
+      "assert abs(float(sets[-1].get('timestep')) - 0.33) < 1e-9\n"
+      "print('ok')\n";
+  std::ofstream(dir / "check.py") << script;
+  const Result py = shell(python + " " + quote(dir / "check.py"));
+  EXPECT_EQ(py.code, 0) << py.output;
+
+  // No fields when asked for none; a negative interval is bad input.
+  ASSERT_EQ(emdae("run " + quote(example("free_ring")) +
+                  " --t-end 0.06 --set output.vtu_every=0 --quiet --out " + quote(dir / "none"))
+                .code,
+            0);
+  EXPECT_FALSE(fs::exists(dir / "none/fields.pvd"));
+  const Result bad = emdae("run " + quote(example("free_ring")) +
+                           " --set output.vtu_every=-2 --quiet --out " + quote(dir / "bad"));
+  EXPECT_EQ(bad.code, 2) << bad.output;
+  EXPECT_NE(bad.output.find("output.vtu_every"), std::string::npos) << bad.output;
+}
+
+TEST(Vtu, AutomaticIntervalGivesAboutAHundredFiles) {
+  EXPECT_EQ(vtu_interval(-1, 50), 1);
+  EXPECT_EQ(vtu_interval(-1, 1000), 10);
+  EXPECT_EQ(vtu_interval(-1, 1001), 11);
+  EXPECT_EQ(vtu_interval(0, 1000), 0);
+  EXPECT_EQ(vtu_interval(3, 1000), 3);
+}
+
+}  // namespace
+}  // namespace emdae

@@ -1,0 +1,686 @@
+// Scene files with FE bodies, contact, Dirichlet sets, loads and statics:
+// every malformed input names the file, line and key (and the CLI exits 2
+// without creating output); every example builds exactly the system the C++
+// API builds for it (tests/contact_systems.hpp); and the three FE examples run
+// through the emdae command with the figures their comments promise.
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "cli/scene.hpp"
+#include "contact_systems.hpp"
+#include "core/quantities.hpp"
+#include "integrators/driver.hpp"
+#include "integrators/stepper.hpp"
+#include "verify/recorder.hpp"
+
+namespace emdae {
+namespace {
+
+namespace fs = std::filesystem;
+
+std::string example(const std::string& name) {
+  return std::string(EMDAE_EXAMPLES_DIR) + "/" + name + ".toml";
+}
+
+std::string quote(const std::string& s) {
+  return "'" + s + "'";
+}
+
+// A fresh folder per test, removed afterwards.
+class TempDir {
+ public:
+  TempDir() {
+    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+    // The process id keeps concurrent runs (two build trees) apart.
+    std::string name = std::string("emdae_scene_fe_") + std::to_string(::getpid()) + "_" +
+                       info->test_suite_name() + "_" + info->name();
+    for (char& c : name)
+      if (c == '/') c = '_';
+    path_ = fs::temp_directory_path() / name;
+    fs::remove_all(path_);
+    fs::create_directories(path_);
+  }
+  ~TempDir() {
+    std::error_code ec;
+    fs::remove_all(path_, ec);
+  }
+  std::string write(const std::string& file, const std::string& content) const {
+    std::ofstream(path_ / file, std::ios::binary) << content;
+    return (path_ / file).string();
+  }
+  const fs::path& path() const { return path_; }
+  std::string operator/(const std::string& p) const { return (path_ / p).string(); }
+
+ private:
+  fs::path path_;
+};
+
+struct Result {
+  int code = -1;
+  std::string output;  // stdout and stderr together
+};
+
+// Runs the emdae executable with `args` through the shell from folder `cwd`.
+Result emdae(const std::string& args, const fs::path& cwd) {
+  const std::string cmd =
+      "cd " + quote(cwd.string()) + " && " + quote(EMDAE_EXE) + " " + args + " 2>&1";
+  Result r;
+  FILE* pipe = ::popen(cmd.c_str(), "r");
+  if (!pipe) return r;
+  char buffer[4096];
+  std::size_t n;
+  while ((n = std::fread(buffer, 1, sizeof buffer, pipe)) > 0) r.output.append(buffer, n);
+  const int status = ::pclose(pipe);
+  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  return r;
+}
+
+nlohmann::json read_json(const std::string& path) {
+  std::ifstream in(path);
+  return nlohmann::json::parse(in);
+}
+
+std::vector<std::string> read_lines(const std::string& path) {
+  std::ifstream in(path);
+  std::vector<std::string> lines;
+  for (std::string line; std::getline(in, line);) lines.push_back(line);
+  return lines;
+}
+
+std::vector<std::string> split(const std::string& line) {
+  std::vector<std::string> cells;
+  std::stringstream in(line);
+  for (std::string cell; std::getline(in, cell, ',');) cells.push_back(cell);
+  return cells;
+}
+
+// 1-based line of the first line of `content` containing `marker`.
+int line_of(const std::string& content, const std::string& marker) {
+  const auto at = content.find(marker);
+  if (at == std::string::npos) return -1;
+  return 1 + static_cast<int>(std::count(content.begin(), content.begin() + at, '\n'));
+}
+
+// --- a small valid FE scene, and variations of it that must be refused -----------
+
+const std::string kTime = "[time]\ndt = 0.01\nt_end = 0.1\n\n";
+
+std::string ring(const std::string& name, double x, const std::string& extra = "") {
+  return "[[bodies]]\nname = \"" + name + "\"\n" + extra +
+         "[bodies.mesh]\ntype = \"ring\"\ncentre = [" + std::to_string(x) +
+         ", 0.0]\ninner_radius = 8.0\nouter_radius = 10.0\naround = 16\nthrough = 1\n"
+         "[bodies.material]\nmodel = \"svk\"\nyoung = 100.0\npoisson = 0.1\ndensity = 0.001\n\n";
+}
+
+const std::string kRings = ring("a", -10.5, "velocity = [1.0, 0.0]\n") + ring("b", 10.5);
+const std::string kContact = "[[contacts]]\nslave = \"a.outer\"\nmaster = \"b.outer\"\n\n";
+const std::string kValid = kTime + kRings + kContact;
+const std::string kTorque =
+    "[[loads]]\ntype = \"torque\"\non = \"a.inner\"\ntorque = 5.0\n"
+    "time_function = { type = \"hat\", start = 0.0, end = 0.05 }\n\n";
+
+struct Malformed {
+  std::string name;
+  std::string content;
+  std::string marker;                 // the message points at the line holding it
+  std::vector<std::string> expected;  // substrings of the message
+};
+
+void PrintTo(const Malformed& c, std::ostream* os) {
+  *os << c.name;
+}
+
+// `text` with the first `from` replaced by `to`.
+std::string with(std::string text, const std::string& from, const std::string& to) {
+  const auto at = text.find(from);
+  if (at != std::string::npos) text.replace(at, from.size(), to);
+  return text;
+}
+
+std::vector<Malformed> malformed_fe_scenes() {
+  return {
+      {"poisson_half",
+       with(kValid, "poisson = 0.1", "poisson = 0.5"),
+       "poisson = 0.5",
+       {"key 'bodies[0].material.poisson'", "must be in (-1, 0.5)", "received 0.5"}},
+      {"young_zero",
+       with(kValid, "young = 100.0", "young = 0.0"),
+       "young = 0.0",
+       {"key 'bodies[0].material.young'", "must be positive", "received 0.0"}},
+      {"young_negative_second_body",
+       with(kTime + ring("a", -10.5) + ring("b", 10.5, "") + kContact,
+            "young = 100.0\npoisson = 0.1\ndensity = 0.001\n\n[[contacts]]",
+            "young = -5.0\npoisson = 0.1\ndensity = 0.001\n\n[[contacts]]"),
+       "young = -5.0",
+       {"key 'bodies[1].material.young'", "received -5.0"}},
+      {"density_missing",
+       with(kValid, "density = 0.001\n", ""),
+       "[bodies.material]",
+       {"key 'bodies[0].material.density'", "missing"}},
+      {"unknown_model",
+       with(kValid, "model = \"svk\"", "model = \"neohook\""),
+       "neohook",
+       {"key 'bodies[0].material.model'", "did you mean 'neo-hooke'?", "received \"neohook\""}},
+      {"unknown_edge_set",
+       with(kValid, "slave = \"a.outer\"", "slave = \"a.outr\""),
+       "a.outr",
+       {"key 'contacts[0].slave'", "no edge set 'outr'", "did you mean 'outer'?",
+        "edge sets of 'a': inner, outer"}},
+      {"unknown_body_in_contact",
+       with(kValid, "master = \"b.outer\"", "master = \"c.outer\""),
+       "c.outer",
+       {"key 'contacts[0].master'", "unknown body 'c'", "bodies: a, b"}},
+      {"set_without_body",
+       with(kValid, "slave = \"a.outer\"", "slave = \"outer\""),
+       "slave = \"outer\"",
+       {"key 'contacts[0].slave'", "\"body.set\"", "received \"outer\""}},
+      {"contact_with_itself",
+       with(kValid, "master = \"b.outer\"", "master = \"a.outer\""),
+       "master = \"a.outer\"",
+       {"key 'contacts[0].master'", "same surface"}},
+      {"ring_without_elements",
+       with(kValid, "around = 16", "around = 0"),
+       "around = 0",
+       {"key 'bodies[0].mesh.around'", "at least 3", "received 0"}},
+      {"rectangle_without_elements",
+       kTime + "[[bodies]]\nname = \"plate\"\nmesh = { type = \"rectangle\", origin = [0.0, 0.0], "
+               "width = 1.0, height = 1.0, nx = 0, ny = 2 }\n"
+               "material = { young = 1.0, poisson = 0.3, density = 1.0 }\n",
+       "mesh =",
+       {"key 'bodies[0].mesh.nx'", "at least 1", "received 0"}},
+      {"radii_swapped",
+       with(kValid, "outer_radius = 10.0", "outer_radius = 7.0"),
+       "outer_radius = 7.0",
+       {"key 'bodies[0].mesh.outer_radius'", "must exceed inner_radius = 8.0", "received 7.0"}},
+      {"mesh_type_unknown",
+       with(kValid, "type = \"ring\"", "type = \"annulus\""),
+       "annulus",
+       {"key 'bodies[0].mesh.type'", "mesh types: ring, rectangle"}},
+      {"mesh_key_misspelt",
+       with(kValid, "through = 1", "thru = 1"),
+       "thru",
+       {"key 'bodies[0].mesh.thru'", "unknown key"}},
+      {"bodies_in_3d",
+       "[scene]\ndimension = 3\n" + kValid,
+       "[[bodies]]",
+       {"key 'bodies[0]'", "scene.dimension = 2", "received dimension 3"}},
+      {"body_name_with_dot",
+       with(kValid, "name = \"a\"", "name = \"a.b\""),
+       "a.b",
+       {"key 'bodies[0].name'", "without '.'"}},
+      {"duplicate_body",
+       kTime + ring("a", -10.5) + ring("a", 10.5),
+       "name = \"a\"\n[bodies.mesh]\ntype = \"ring\"\ncentre = [10.5",
+       {"key 'bodies[1].name'", "duplicate body name"}},
+      {"torque_on_missing_set",
+       kValid + with(kTorque, "a.inner", "a.hub"),
+       "a.hub",
+       {"key 'loads[0].on'", "no node set 'hub'", "node sets of 'a': inner, outer"}},
+      {"hat_end_before_start",
+       kValid + with(kTorque, "end = 0.05", "end = 0.0"),
+       "time_function",
+       {"key 'loads[0].time_function.end'", "must exceed start = 0.0", "received 0.0"}},
+      {"table_times_not_increasing",
+       kValid + with(kTorque, "{ type = \"hat\", start = 0.0, end = 0.05 }",
+                     "{ type = \"table\", times = [0.0, 0.2, 0.1], values = [0.0, 1.0, 0.0] }"),
+       "time_function",
+       {"key 'loads[0].time_function.times'", "increase"}},
+      {"load_type_unknown",
+       kValid + with(kTorque, "type = \"torque\"", "type = \"torqe\""),
+       "torqe",
+       {"key 'loads[0].type'", "did you mean 'torque'?"}},
+      {"load_key_of_other_type",
+       kValid + with(kTorque, "torque = 5.0", "torque = 5.0\nacceleration = [0.0, -1.0]"),
+       "acceleration",
+       {"key 'loads[0].acceleration'", "not a key of a torque load"}},
+      {"body_force_unknown_body",
+       kValid + "[[loads]]\ntype = \"body_force\"\nbody = \"z\"\nacceleration = [0.0, -1.0]\n",
+       "body = \"z\"",
+       {"key 'loads[0].body'", "unknown body", "received \"z\""}},
+      {"ida_with_contact",
+       kValid + "[scheme]\nname = \"ida\"\n",
+       "name = \"ida\"",
+       {"key 'scheme.name'", "scheme 'ida' does not support contact", "{path}:"}},
+      {"galpha_with_loads",
+       kTime + kRings + kTorque + "[scheme]\nname = \"galpha\"\n",
+       "name = \"galpha\"",
+       {"key 'scheme.name'", "scheme 'galpha' does not apply external loads"}},
+      {"dirichlet_nothing_prescribed",
+       kValid + "[[dirichlet]]\nnodes = \"b.outer\"\nfixed = false\n",
+       "fixed = false",
+       {"key 'dirichlet[0].fixed'", "nothing prescribed"}},
+      {"dirichlet_conflict",
+       kValid + "[[dirichlet]]\nnodes = \"b.outer\"\nfixed = true\n\n" +
+           "[[dirichlet]]\nnodes = \"b.outer\"  # again\ndisplacement = [1.0, 0.0]\n",
+       "# again",
+       {"key 'dirichlet[1].nodes'", "already prescribed"}},
+      {"hold_rotation_unknown_set",
+       kValid + "[statics]\nhold_rotation = [\"b.hub\"]\n",
+       "hold_rotation",
+       {"key 'statics.hold_rotation'", "no node set 'hub'"}},
+      {"rho_inf_out_of_range",
+       kTime + kRings + "[scheme]\nname = \"galpha\"\nrho_inf = 1.5\n",
+       "rho_inf",
+       {"key 'scheme.rho_inf'", "[0, 1]", "received 1.5"}},
+      {"search_margin_negative",
+       with(kValid, "master = \"b.outer\"\n", "master = \"b.outer\"\nsearch_margin = -1.0\n"),
+       "search_margin",
+       {"key 'contacts[0].search_margin'", "received -1.0"}},
+      {"nothing_to_integrate", kTime, "", {"key 'bodies'", "nothing to integrate"}},
+  };
+}
+
+class MalformedFeScene : public ::testing::TestWithParam<Malformed> {};
+
+TEST_P(MalformedFeScene, ErrorNamesFileLineAndKey) {
+  const Malformed& c = GetParam();
+  TempDir dir;
+  const std::string path = dir.write(c.name + ".toml", c.content);
+  try {
+    load_scene(path);
+    FAIL() << c.name << ": no SceneError";
+  } catch (const SceneError& e) {
+    const std::string msg = e.what();
+    const int line = c.marker.empty() ? 1 : line_of(c.content, c.marker);
+    ASSERT_GT(line, 0) << "bad test: marker not in content";
+    EXPECT_NE(msg.find(path + ":" + std::to_string(line) + ":"), std::string::npos)
+        << "expected " << path << ":" << line << ": in\n  " << msg;
+    for (std::string want : c.expected) {
+      if (want.rfind("{path}", 0) == 0) want = path + want.substr(6);
+      EXPECT_NE(msg.find(want), std::string::npos) << "expected '" << want << "' in\n  " << msg;
+    }
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(Scenes, MalformedFeScene, ::testing::ValuesIn(malformed_fe_scenes()),
+                         [](const auto& param_info) { return param_info.param.name; });
+
+TEST(SceneFe, MalformedCasesAreMany) {
+  EXPECT_GE(malformed_fe_scenes().size(), 20u);
+}
+
+// The same through the command: exit 2, the located message, no output
+// folder (neither the one asked for nor the default one).
+TEST(SceneFe, CommandRefusesMalformedScenesWithoutOutput) {
+  for (const Malformed& c : malformed_fe_scenes()) {
+    if (c.marker.empty()) continue;
+    TempDir dir;
+    const std::string path = dir.write(c.name + ".toml", c.content);
+    const int line = line_of(c.content, c.marker);
+    for (const std::string& args : {"run " + quote(path) + " --out " + quote(dir / "o"),
+                                    "run " + quote(path), "check " + quote(path)}) {
+      const Result r = emdae(args, dir.path());
+      EXPECT_EQ(r.code, 2) << c.name << ": " << args << "\n" << r.output;
+      EXPECT_NE(r.output.find(path + ":" + std::to_string(line) + ":"), std::string::npos)
+          << c.name << "\n"
+          << r.output;
+      EXPECT_NE(r.output.find(c.expected.front()), std::string::npos) << c.name << "\n" << r.output;
+    }
+    EXPECT_FALSE(fs::exists(dir / "o")) << c.name;
+    EXPECT_FALSE(fs::exists(dir / "out")) << c.name;
+  }
+}
+
+TEST(SceneFe, SchemeFromTheCommandLineIsNamedAsTheCulprit) {
+  TempDir dir;
+  const Result r = emdae("run " + quote(example("ring_impact")) + " --scheme ida", dir.path());
+  EXPECT_EQ(r.code, 2) << r.output;
+  EXPECT_NE(r.output.find("--scheme ida: key 'scheme.name': scheme 'ida' does not support "
+                          "contact"),
+            std::string::npos)
+      << r.output;
+  EXPECT_FALSE(fs::exists(dir / "out"));
+}
+
+// --- what valid scenes build -----------------------------------------------------
+
+TEST(SceneFe, SmallScenesBuildBodiesContactAndNames) {
+  TempDir dir;
+  const auto scene = load_scene(dir.write("ok.toml", kValid));
+  ASSERT_EQ(scene->bodies.size(), 2u);
+  EXPECT_EQ(scene->bodies[0].name, "a");
+  EXPECT_EQ(scene->bodies[0].n_nodes, 32);
+  EXPECT_EQ(scene->bodies[0].n_elements, 16);
+  EXPECT_EQ(scene->bodies[1].node_offset, 32);
+  EXPECT_EQ(scene->system->n_nodes(), 64);
+  EXPECT_EQ(scene->system->potentials().size(), 32u);
+  ASSERT_EQ(scene->contacts.size(), 1u);
+  EXPECT_EQ(scene->contacts[0].name, "a.outer/b.outer");
+  EXPECT_EQ(scene->contacts[0].slave_segments, 16);
+  EXPECT_EQ(scene->system->n_unilateral(), 16);
+  EXPECT_TRUE(scene->warnings.empty());
+  // Body mass = rho times the (polygonal) ring area.
+  const double area = 0.5 * 16 * std::sin(2 * std::acos(-1.0) / 16) * (100.0 - 64.0);
+  EXPECT_NEAR(scene->bodies[0].mass, 0.001 * area, 1e-12);
+}
+
+TEST(SceneFe, BodyForceAndTractionAreConsistentNodalLoads) {
+  TempDir dir;
+  const std::string plate =
+      kTime +
+      "[[bodies]]\nname = \"plate\"\n"
+      "mesh = { type = \"rectangle\", origin = [0.0, 0.0], width = 2.0, height = 1.0, "
+      "nx = 4, ny = 2 }\n"
+      "material = { model = \"neo-hooke\", young = 10.0, poisson = 0.3, density = 3.0 }\n"
+      "[[loads]]\ntype = \"body_force\"\nbody = \"plate\"\nacceleration = [0.5, -2.0]\n"
+      "time_function = { type = \"ramp\", start = 0.0, end = 1.0, value = 2.0 }\n"
+      "[[loads]]\nname = \"push\"\ntype = \"traction\"\non = \"plate.right\"\n"
+      "traction = [-4.0, 1.0]\n";
+  const auto scene = load_scene(dir.write("plate.toml", plate));
+  const System& s = *scene->system;
+  ASSERT_EQ(s.loads().size(), 2u);
+  ASSERT_EQ(scene->loads.size(), 2u);
+  EXPECT_EQ(scene->loads[1].name, "push");
+  // At t = 0.5 the ramp is at 1: body force m b with m = rho w h = 6, plus
+  // the traction times the right edge's length 1.
+  Vec f = Vec::Zero(s.n_dofs());
+  s.add_load_forces(s.initial_positions(), 0.5, f);
+  double fx = 0, fy = 0;
+  for (int a = 0; a < s.n_nodes(); ++a) fx += f[2 * a], fy += f[2 * a + 1];
+  EXPECT_NEAR(fx, 6.0 * 0.5 - 4.0, 1e-12);
+  EXPECT_NEAR(fy, 6.0 * -2.0 + 1.0, 1e-12);
+  // Consistent, not lumped per element count: a corner node carries a
+  // quarter of an element's mass, an interior node four quarters.
+  const double element_mass = 3.0 * 0.5 * 0.5;
+  EXPECT_NEAR(f[1] - 0.0, element_mass / 4 * -2.0, 1e-12);  // node 0, no traction there
+  EXPECT_FALSE(scene->loads_vanish(0.0, 0.1));
+}
+
+TEST(SceneFe, DirichletFixesAndDrivesNodes) {
+  TempDir dir;
+  const std::string plate =
+      kTime +
+      "[[bodies]]\nname = \"plate\"\n"
+      "mesh = { type = \"rectangle\", origin = [0.0, 0.0], width = 2.0, height = 1.0, "
+      "nx = 2, ny = 2 }\n"
+      "material = { young = 10.0, poisson = 0.3, density = 1.0 }\n"
+      "[[dirichlet]]\nnodes = \"plate.left\"\nfixed = true\n"
+      "[[dirichlet]]\nnodes = \"plate.bottom\"\nfixed = true\ncomponents = \"y\"\n"
+      "[[dirichlet]]\nnodes = \"plate.right\"\ndisplacement = [0.2, 0.0]\ncomponents = \"x\"\n"
+      "time_function = { type = \"ramp\", start = 0.0, end = 2.0 }\n";
+  const auto scene = load_scene(dir.write("plate.toml", plate));
+  const System& s = *scene->system;
+  // left: 3 nodes x 2; bottom: 3 nodes y, one of them already fixed (the
+  // shared corner); right: 3 nodes x.
+  EXPECT_EQ(s.prescribed().size(), 6u + 2u + 3u);
+  ASSERT_EQ(scene->dirichlet.size(), 3u);
+  EXPECT_EQ(scene->dirichlet[0].n_dofs, 6);
+  EXPECT_EQ(scene->dirichlet[1].n_dofs, 2);
+  const int corner = 2;  // node (nx, 0): right end of the bottom edge
+  for (const auto& p : s.prescribed()) {
+    if (p.dof != 2 * corner) continue;
+    ASSERT_TRUE(p.position && p.velocity);
+    EXPECT_NEAR(p.position(1.0), 2.0 + 0.1, 1e-14);
+    EXPECT_NEAR(p.velocity(1.0), 0.1, 1e-14);
+    EXPECT_NEAR(p.velocity(3.0), 0.0, 1e-14);
+  }
+  EXPECT_FALSE(s.symmetry().translation);
+}
+
+TEST(SceneFe, GravityWeighsFreeBodyNodes) {
+  TempDir dir;
+  const std::string plate =
+      kTime +
+      "[gravity]\nacceleration = [0.0, -10.0]\n"
+      "[[bodies]]\nname = \"plate\"\n"
+      "mesh = { type = \"rectangle\", origin = [0.0, 0.0], width = 2.0, height = 1.0, "
+      "nx = 2, ny = 1 }\n"
+      "material = { young = 10.0, poisson = 0.3, density = 1.5 }\n"
+      "[[dirichlet]]\nnodes = \"plate.left\"\nfixed = true\n";
+  const auto scene = load_scene(dir.write("plate.toml", plate));
+  const System& s = *scene->system;
+  // 6 nodes, 2 fixed: 2 elements + 4 dead loads. V = -sum m_A g y_A = 0 at y = 0 rows.
+  EXPECT_EQ(s.potentials().size(), 2u + 4u);
+  Vec q = s.initial_positions();
+  for (int a = 0; a < s.n_nodes(); ++a) q[2 * a + 1] += 1.0;  // lift everything by 1
+  const double lifted =
+      potential_energy(s, q, 0.0) - potential_energy(s, s.initial_positions(), 0.0);
+  // Free nodes carry 3/4 of the mass 1.5 * 2 (the fixed left column a quarter).
+  EXPECT_NEAR(lifted, 10.0 * 1.5 * 2.0 * 0.75, 1e-9);
+}
+
+TEST(SceneFe, LoadFreeIntervalsFollowTheTimeFunctions) {
+  TempDir dir;
+  const auto scene = load_scene(dir.write("t.toml", kValid + kTorque));
+  EXPECT_FALSE(scene->loads_vanish(0.0, 0.01));
+  EXPECT_FALSE(scene->loads_vanish(0.04, 0.05));
+  EXPECT_TRUE(scene->loads_vanish(0.05, 0.06));
+  EXPECT_TRUE(scene->loads_vanish(-1.0, 0.0));
+  const auto without = load_scene(dir.write("u.toml", kValid));
+  EXPECT_TRUE(without->loads_vanish(0.0, 1.0));
+}
+
+// The recorder on a loaded run: energy error over the load-free part only,
+// the balance H - H_0 = W throughout.
+TEST(SceneFe, RecorderSplitsLoadedAndLoadFreeIntervals) {
+  TempDir dir;
+  const auto scene = load_scene(dir.write("t.toml", kTime + kRings + kTorque));
+  const System& s = *scene->system;
+  auto stepper = make_stepper("em", s, scene->newton, scene->scheme_settings);
+  State st = initial_state(s);
+  Recorder rec(s, st);
+  rec.set_load_free_test([&](double a, double b) { return scene->loads_vanish(a, b); });
+  const RunOutcome out = integrate(
+      *stepper, st, scene->time, [&](const State& x, const AcceptedStep& a) { rec.observe(x, a); });
+  ASSERT_TRUE(out.ok) << out.message;
+  EXPECT_TRUE(rec.has_external_work());
+  EXPECT_GT(rec.last().external_work, 0.0);
+  EXPECT_EQ(rec.load_free_intervals(), 1);
+  EXPECT_NEAR(rec.load_free_time(), 0.05, 0.0101);
+  EXPECT_LE(rec.energy_rel_error_max(), 1e-9);
+  ASSERT_TRUE(rec.energy_balance_rel_error_max());
+  EXPECT_LE(*rec.energy_balance_rel_error_max(), 1e-9);
+  EXPECT_NE(rec.energy_note().find("load-free"), std::string::npos);
+  // A pure torque: linear momentum conserved in fact, but the system has a
+  // load, so the figure is the balance (whose impulse sums to zero).
+  EXPECT_FALSE(rec.linear_momentum_error_max());
+  ASSERT_TRUE(rec.linear_momentum_balance_error_max());
+  EXPECT_LE(*rec.linear_momentum_balance_error_max(), 1e-12);
+  ASSERT_TRUE(rec.angular_momentum_balance_rel_error_max());
+  EXPECT_LE(*rec.angular_momentum_balance_rel_error_max(), 1e-10);
+}
+
+// --- the examples build what the C++ API builds ---------------------------------------
+
+void expect_same_system(const System& a, const System& b) {
+  ASSERT_EQ(a.n_dofs(), b.n_dofs());
+  EXPECT_LE((a.initial_positions() - b.initial_positions()).cwiseAbs().maxCoeff(), 1e-12);
+  EXPECT_LE((a.initial_velocities() - b.initial_velocities()).cwiseAbs().maxCoeff(), 1e-12);
+  EXPECT_LE(SparseMatrix(a.mass() - b.mass()).norm(), 1e-14 * a.mass().norm());
+  EXPECT_EQ(a.potentials().size(), b.potentials().size());
+  EXPECT_EQ(a.n_constraints(), b.n_constraints());
+  EXPECT_EQ(a.n_unilateral(), b.n_unilateral());
+  EXPECT_EQ(a.is_prescribed(), b.is_prescribed());
+  EXPECT_EQ(a.loads().size(), b.loads().size());
+  // Same energy and same load at a deformed configuration.
+  Vec q = a.initial_positions();
+  for (Eigen::Index i = 0; i < q.size(); ++i) q[i] += 1e-3 * std::sin(0.7 * static_cast<double>(i));
+  EXPECT_NEAR(potential_energy(a, q, 0.3), potential_energy(b, q, 0.3),
+              1e-10 * std::max(1.0, std::abs(potential_energy(b, q, 0.3))));
+  Vec fa = Vec::Zero(a.n_dofs()), fb = Vec::Zero(b.n_dofs());
+  a.add_load_forces(q, 0.3, fa);
+  b.add_load_forces(q, 0.3, fb);
+  EXPECT_LE((fa - fb).cwiseAbs().maxCoeff(), 1e-9);
+}
+
+TEST(ExamplesFe, RingImpactIsThePapersImpact) {
+  const auto scene = load_scene(example("ring_impact"));
+  EXPECT_EQ(scene->name, "ring_impact");
+  EXPECT_EQ(scene->scheme, "em");
+  EXPECT_DOUBLE_EQ(scene->time.dt, 0.01);
+  EXPECT_DOUBLE_EQ(scene->time.t_end, 20.0);
+  EXPECT_TRUE(scene->warnings.empty());
+  // Outer surfaces 120 apart along x, right ring 20 higher, speeds 10 each.
+  const auto api = test_systems::ring_impact(120.0, 10.0, 20.0, 64, 1, 47.0, 50.0);
+  expect_same_system(*scene->system, *api.system);
+  const State st = initial_state(*scene->system);
+  const Quantities q = measure(*scene->system, st.q, st.v, 0.0);
+  EXPECT_GT(std::abs(q.angular_momentum[0]), 100.0);  // off-centre
+  EXPECT_TRUE(scene->tolerances.energy_rel.has_value());
+}
+
+TEST(ExamplesFe, BearingIsThePapersBearing) {
+  const auto scene = load_scene(example("bearing"));
+  const auto api = test_systems::bearing();
+  expect_same_system(*scene->system, *api.system);
+  ASSERT_TRUE(scene->statics.enabled);
+  ASSERT_EQ(scene->statics.hold_rotation.size(), 1u);
+  EXPECT_EQ(scene->statics.hold_rotation[0], api.inner_surface);
+  EXPECT_EQ(scene->statics.hold_names[0], "inner_ring.inner");
+  ASSERT_EQ(scene->loads.size(), 1u);
+  EXPECT_TRUE(scene->loads_vanish(0.5, 2.0));
+  EXPECT_FALSE(scene->loads_vanish(0.0, 0.5));
+}
+
+TEST(ExamplesFe, FreeRingFliesFree) {
+  const auto scene = load_scene(example("free_ring"));
+  const System& s = *scene->system;
+  ASSERT_EQ(scene->bodies.size(), 1u);
+  EXPECT_EQ(s.n_nodes(), 128);
+  EXPECT_EQ(s.n_unilateral(), 0);
+  EXPECT_TRUE(s.prescribed().empty());
+  EXPECT_TRUE(s.symmetry().translation && s.symmetry().rotation);
+  EXPECT_EQ(std::lround(scene->time.t_end / scene->time.dt), 1000);
+  const State st = initial_state(s);
+  const Quantities q = measure(s, st.q, st.v, 0.0);
+  EXPECT_GT(q.linear_momentum.norm(), 0.1);
+  EXPECT_GT(std::abs(q.angular_momentum[0]), 1.0);
+}
+
+// --- the examples through the command ---------------------------------------------
+
+TEST(ExamplesFeRun, FreeRingConservesEverything) {
+  TempDir dir;
+  const Result r = emdae(
+      "run " + quote(example("free_ring")) + " --t-end 3 -q --out " + quote(dir / "o"), dir.path());
+  ASSERT_EQ(r.code, 0) << r.output;
+  const nlohmann::json s = read_json(dir / "o/summary.json");
+  EXPECT_EQ(s["status"], "ok");
+  EXPECT_EQ(s["steps"], 100);
+  EXPECT_LE(s["energy_rel_error_max"].get<double>(), 1e-9);
+  EXPECT_LE(s["linear_momentum_error_max"].get<double>(), 1e-10);
+  EXPECT_LE(s["angular_momentum_rel_error_max"].get<double>(), 1e-10);
+  EXPECT_FALSE(s.contains("contact_window"));                // no contact declared
+  EXPECT_FALSE(s.contains("energy_balance_rel_error_max"));  // no loads
+  EXPECT_EQ(read_lines(dir / "o/history.csv")[0],
+            "t,dt,kinetic,potential,total_energy,Lx,Ly,J,phi_max,newton_iterations,cutbacks");
+}
+
+TEST(ExamplesFeRun, RingImpactReportsTheContact) {
+  TempDir dir;
+  const Result r = emdae(
+      "run " + quote(example("ring_impact")) + " --set time.t_end=7 -q --out " + quote(dir / "o"),
+      dir.path());
+  ASSERT_EQ(r.code, 0) << r.output;
+  const nlohmann::json s = read_json(dir / "o/summary.json");
+  EXPECT_EQ(s["status"], "ok");
+  EXPECT_EQ(s["steps"], 700);
+  EXPECT_LE(s["energy_rel_error_max"].get<double>(), 1e-8);
+  EXPECT_LE(s["linear_momentum_error_max"].get<double>(), 1e-10);
+  EXPECT_LE(s["angular_momentum_rel_error_max"].get<double>(), 1e-10);
+  // The surfaces meet at t = 6.1 (closing speed 20 over 122).
+  ASSERT_TRUE(s["contact_window"].is_array()) << s;
+  EXPECT_NEAR(s["contact_window"][0].get<double>(), 6.11, 0.02);
+  EXPECT_NEAR(s["contact_window"][1].get<double>(), 7.0, 1e-9);
+  EXPECT_GE(s["active_contacts_max"].get<int>(), 1);
+  EXPECT_GE(s["contact_events"].get<long>(), 1);
+  EXPECT_LE(s["gap_violation_max"].get<double>(), 1e-8);
+  EXPECT_LE(s["penetration_max"].get<double>(), 1e-8);
+  EXPECT_EQ(s["checks_pass"], true);
+
+  const auto lines = read_lines(dir / "o/history.csv");
+  const auto header = split(lines[0]);
+  const auto column = [&](const std::string& name) {
+    return static_cast<std::size_t>(std::find(header.begin(), header.end(), name) - header.begin());
+  };
+  ASSERT_LT(column("penetration_max"), header.size()) << lines[0];
+  EXPECT_EQ(header.back(), "penetration_max");
+  int rows_in_contact = 0;
+  for (std::size_t i = 1; i < lines.size(); ++i) {
+    const auto row = split(lines[i]);
+    ASSERT_EQ(row.size(), header.size());
+    if (std::stoi(row[column("active_contacts")]) > 0) ++rows_in_contact;
+  }
+  EXPECT_GT(rows_in_contact, 50);  // t = 6.11 .. 7
+}
+
+TEST(ExamplesFeRun, BearingBalancesEnergyAndReportsStatics) {
+  TempDir dir;
+  const Result r =
+      emdae("run " + quote(example("bearing")) + " --set time.t_end=0.6 --out " + quote(dir / "o"),
+            dir.path());
+  ASSERT_EQ(r.code, 0) << r.output;
+  EXPECT_NE(r.output.find("statics"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("energy balance error"), std::string::npos) << r.output;
+  const nlohmann::json s = read_json(dir / "o/summary.json");
+  EXPECT_EQ(s["status"], "ok");
+  EXPECT_EQ(s["steps"], 60);
+  ASSERT_TRUE(s["energy_balance_rel_error_max"].is_number()) << s;
+  EXPECT_LE(s["energy_balance_rel_error_max"].get<double>(), 1e-8);
+  EXPECT_GT(s["external_work"].get<double>(), 100.0);  // the torque spun the ring up
+  // After the torque (t > 0.5) the energy is conserved.
+  EXPECT_LE(s["energy_rel_error_max"].get<double>(), 1e-8);
+  EXPECT_NE(s["energy_note"].get<std::string>().find("1 load-free interval"), std::string::npos);
+  EXPECT_TRUE(s["angular_momentum_rel_error_max"].is_null());  // fixed, loaded
+  ASSERT_TRUE(s["angular_momentum_balance_rel_error_max"].is_number()) << s;
+  EXPECT_LE(s["angular_momentum_balance_rel_error_max"].get<double>(), 1e-8);
+
+  const nlohmann::json& st = s["statics"];
+  ASSERT_TRUE(st.is_object()) << s;
+  EXPECT_EQ(st["converged"], true);
+  EXPECT_GE(st["steps"].get<int>(), 1);
+  EXPECT_EQ(st["holds"], nlohmann::json::array({"inner_ring.inner"}));
+  ASSERT_EQ(st["holding_moments"].size(), 1u);
+  EXPECT_EQ(st["active_contacts"], 40);  // every slave node pressed
+  EXPECT_NE(st["message"].get<std::string>().find("ok"), std::string::npos);
+  EXPECT_EQ(s["active_contacts_max"], 40);
+  EXPECT_LE(s["gap_violation_max"].get<double>(), 1e-8);
+  EXPECT_EQ(s["checks_pass"], true);
+  const auto header = read_lines(dir / "o/history.csv")[0];
+  EXPECT_NE(header.find(",total_energy,external_work,"), std::string::npos) << header;
+}
+
+TEST(ExamplesFeRun, FailedStaticsEndsTheRunWithItsRecord) {
+  TempDir dir;
+  const Result r = emdae("run " + quote(example("bearing")) +
+                             " --set statics.max_steps=1 --set statics.tolerance=1e-14 -q --out " +
+                             quote(dir / "o"),
+                         dir.path());
+  EXPECT_EQ(r.code, 3) << r.output;
+  const nlohmann::json s = read_json(dir / "o/summary.json");
+  EXPECT_NE(s["status"].get<std::string>().find("static solve: not converged after 1 pseudo"),
+            std::string::npos)
+      << s;
+  EXPECT_EQ(s["steps"], 0);
+  EXPECT_EQ(s["statics"]["converged"], false);
+  EXPECT_EQ(s["statics"]["steps"], 1);
+  EXPECT_EQ(read_lines(dir / "o/history.csv").size(), 2u);  // header and the state reached
+}
+
+TEST(ExamplesFeRun, CheckShowsBodiesContactsLoadsAndStatics) {
+  TempDir dir;
+  const Result r = emdae("check " + quote(example("bearing")), dir.path());
+  ASSERT_EQ(r.code, 0) << r.output;
+  for (const char* s :
+       {"outer_ring: ring, 48 x 10 elements", "528 nodes, 480 elements", "E = 100000",
+        "dofs          1936 (1840 free, 96 prescribed)", "outer_ring.outer: fixed (x, y)",
+        "slave inner_ring.outer (40 segments", "master outer_ring.inner (48 segments)",
+        "torque 10000 on inner_ring.inner", "hat(0, 0.5)",
+        "holding the rotation of inner_ring.inner", "potentials    880: Q1 element 880"})
+    EXPECT_NE(r.output.find(s), std::string::npos) << s << " in\n" << r.output;
+  EXPECT_TRUE(fs::is_empty(dir.path()));
+}
+
+}  // namespace
+}  // namespace emdae

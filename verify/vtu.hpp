@@ -1,0 +1,85 @@
+// Fields for ParaView: one VTU file (XML UnstructuredGrid, ASCII) per output
+// step holding every FE body of the scene, and a PVD index (fields.pvd) that
+// gives each file its time, so ParaView opens the whole run as one animation.
+//
+// Per node (PointData): the current position is the grid's points; then
+// "displacement" u = x - X, "velocity" v and "reference_position" X, all
+// with 3 components (z = 0) as ParaView expects for vectors. Per element
+// (CellData): "body" (index in the list given), the element stresses
+// averaged over the 2x2 Gauss points, "second_piola_kirchhoff" S and
+// "cauchy_stress" sigma = F S F^T / det F, each as the in-plane components
+// (xx, yy, xy), and "det_F". The out-of-plane stress of plane strain is not
+// written: it depends on the material model and is not part of S's 2x2
+// block that the element computes.
+//
+// Every file is written atomically (temporary file, then rename): ParaView
+// watching the folder never reads half a step. fields.pvd is rewritten by
+// close() (and by the destructor, so a failed or interrupted run still
+// gets an index of what it wrote).
+#pragma once
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "core/fe_element.hpp"
+#include "core/material.hpp"
+#include "core/mesh.hpp"
+#include "integrators/stepper.hpp"
+
+namespace emdae {
+
+/// One FE body of a scene as the field writer needs it: its mesh (reference
+/// configuration), where its nodes start in the system, and its material.
+struct VtuBody {
+  std::string name;
+  Mesh mesh;
+  int node_offset = 0;  // system node of mesh node 0 (BodyInfo::node_offset)
+  Material material;
+};
+
+class FieldWriter {
+ public:
+  /// Fields go to `dir`/fields/step_NNNNNNN.vtu and the index to
+  /// `dir`/fields.pvd. `dim` is the system's dimension (only 2 has bodies).
+  /// Throws std::runtime_error when the folder cannot be created, and
+  /// std::invalid_argument for an empty body list or an invalid mesh.
+  FieldWriter(const std::string& dir, std::vector<VtuBody> bodies, int dim = 2);
+  ~FieldWriter();
+  FieldWriter(const FieldWriter&) = delete;
+  FieldWriter& operator=(const FieldWriter&) = delete;
+
+  /// Writes the state of step `step` (0: the initial state). Throws
+  /// std::runtime_error naming the file when it cannot be written.
+  void write(const State& state, long step);
+  /// Writes fields.pvd; further writes are refused.
+  void close();
+
+  /// Path of the VTU file of `step`, relative to the output folder.
+  static std::string file_name(long step);
+  const std::string& pvd_path() const { return pvd_path_; }
+  long files_written() const { return static_cast<long>(entries_.size()); }
+
+ private:
+  void write_pvd() const;
+
+  std::string dir_, pvd_path_;
+  std::vector<VtuBody> bodies_;
+  int dim_;
+  // One element per quad, built once: they hold the reference gradients the
+  // stresses need. Local dofs 0..7 (the writer hands them local positions).
+  std::vector<std::vector<std::unique_ptr<Q1Element>>> elements_;
+  struct Entry {
+    double t;
+    std::string file;
+  };
+  std::vector<Entry> entries_;
+  bool closed_ = false;
+};
+
+/// The step interval for VTU output: `requested` when it is positive; for
+/// the automatic setting (negative) about 100 files over `steps` steps.
+/// 0 means none.
+long vtu_interval(long requested, long steps);
+
+}  // namespace emdae
