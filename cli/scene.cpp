@@ -1,5 +1,7 @@
 #include "cli/scene.hpp"
 
+#include "core/gmsh_reader.hpp"
+
 #include <fmt/format.h>
 #include <toml++/toml.h>
 
@@ -686,8 +688,8 @@ std::string Builder::unique_name(const Fields& f, std::vector<std::string>& take
 }
 
 Mesh Builder::mesh(const Fields& f, std::string* text) const {
-  const Fields m = f.table("mesh", "{type = \"ring\" | \"rectangle\", ...}", "a mesh");
-  const std::string type = m.string("type", "\"ring\" or \"rectangle\"");
+  const Fields m = f.table("mesh", "{type = \"ring\" | \"rectangle\" | \"gmsh\", ...}", "a mesh");
+  const std::string type = m.string("type", "\"ring\", \"rectangle\" or \"gmsh\"");
   // Element counts beyond this are a typo, not a mesh (and would overflow).
   constexpr long kMaxCount = 100000, kMaxElements = 10000000;
   if (type == "ring") {
@@ -727,8 +729,25 @@ Mesh Builder::mesh(const Fields& f, std::string* text) const {
     return rectangle_mesh(Eigen::Vector2d(o[0], o[1]), w, h, static_cast<int>(nx),
                           static_cast<int>(ny));
   }
+  if (type == "gmsh") {
+    // A Gmsh MSH 4.1 file, relative to the scene file's folder; its physical
+    // curves become the body's edge sets (see core/gmsh_reader.hpp).
+    m.only({"type", "file", "surface"});
+    const std::string file = m.string("file", "the mesh file, a path relative to the scene");
+    const std::string surface = m.optional_string("surface").value_or("");
+    const std::filesystem::path base = std::filesystem::path(scene_.source_path).parent_path();
+    const std::string path = (base / file).string();
+    try {
+      Mesh mesh = read_gmsh(path, surface);
+      *text = fmt::format("gmsh {}{}, {} elements", file, surface.empty() ? "" : " (" + surface + ")",
+                          mesh.n_elements());
+      return mesh;
+    } catch (const std::exception& e) {
+      m.fail_key("file", std::string(e.what()) + ", received \"" + file + "\"");
+    }
+  }
   m.fail_key("type", "unknown mesh type, received " + show(*m.find("type")) +
-                         hint(type, {"ring", "rectangle"}, "mesh types"));
+                         hint(type, {"ring", "rectangle", "gmsh"}, "mesh types"));
 }
 
 Material Builder::material(const Fields& f) const {

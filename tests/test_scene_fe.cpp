@@ -154,6 +154,11 @@ std::vector<Malformed> malformed_fe_scenes() {
        with(kValid, "poisson = 0.1", "poisson = 0.5"),
        "poisson = 0.5",
        {"key 'bodies[0].material.poisson'", "must be in (-1, 0.5)", "received 0.5"}},
+      {"gmsh_file_missing",
+       kTime + "[[bodies]]\nname = \"p\"\n[bodies.mesh]\ntype = \"gmsh\"\nfile = \"no_such.msh\"\n"
+               "[bodies.material]\nyoung = 100.0\npoisson = 0.1\ndensity = 1.0\n",
+       "file = \"no_such.msh\"",
+       {"key 'bodies[0].mesh.file'", "cannot open mesh file", "received \"no_such.msh\""}},
       {"young_zero",
        with(kValid, "young = 100.0", "young = 0.0"),
        "young = 0.0",
@@ -512,6 +517,17 @@ void expect_same_system(const System& a, const System& b) {
   a.add_load_forces(q, 0.3, fa);
   b.add_load_forces(q, 0.3, fb);
   EXPECT_LE((fa - fb).cwiseAbs().maxCoeff(), 1e-9);
+}
+
+TEST(ExamplesFe, PlateWithHoleImportsItsGmshMesh) {
+  // The body comes from examples/meshes/plate_with_hole.msh (gmsh wrote it):
+  // 166 quadrilaterals; the physical curves are the sets the scene uses.
+  const auto scene = load_scene(example("plate_with_hole"));
+  ASSERT_EQ(scene->bodies.size(), 1u);
+  EXPECT_EQ(scene->bodies[0].geometry.n_elements(), 166);
+  EXPECT_EQ(scene->system->n_dofs(), 2 * scene->bodies[0].geometry.n_nodes());
+  EXPECT_FALSE(scene->system->prescribed().empty());  // "plate.left" clamped
+  EXPECT_EQ(scene->system->loads().size(), 1u);       // traction on "plate.right"
 }
 
 TEST(ExamplesFe, RingImpactIsThePapersImpact) {

@@ -191,9 +191,14 @@ void Recorder::update_maxima(const Sample& s) {
   const Quantities& q0 = initial_.quantities;
   const Quantities& q = s.quantities;
   // The energy balance: what the loads put in since t_0 is not an error.
-  const double drift =
-      std::abs(q.total() - q0.total() - (s.external_work - initial_.external_work));
-  keep_max(balance_error_max_, energy_scale_ > 0 ? drift / energy_scale_ : drift);
+  const double work = s.external_work - initial_.external_work;
+  const double drift = std::abs(q.total() - q0.total() - work);
+  // With loads, a run may start from rest and unstressed (H_0 = 0): the
+  // balance is then measured against the largest energy the run has held.
+  if (has_loads_)
+    balance_scale_ = std::max({balance_scale_, energy_scale_, q.kinetic + std::abs(q.potential), std::abs(work)});
+  const double scale = has_loads_ ? balance_scale_ : energy_scale_;
+  keep_max(balance_error_max_, scale > 0 ? drift / scale : drift);
   if (!has_loads_) energy_error_max_ = balance_error_max_;
   keep_max(linear_error_max_, (q.linear_momentum - q0.linear_momentum).norm());
   const double dj = (q.angular_momentum - q0.angular_momentum).norm();

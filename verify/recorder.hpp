@@ -163,6 +163,7 @@ class Recorder {
   Sample initial_, last_;
   bool has_loads_ = false, has_contact_ = false;
   double energy_scale_ = 0.0;   // 0: report the absolute energy error
+  double balance_scale_ = 0.0;  // with loads: the largest energy held so far
   double angular_scale_ = 0.0;  // 0: report the absolute angular momentum error
   double energy_error_max_ = 0.0;
   double balance_error_max_ = 0.0;
