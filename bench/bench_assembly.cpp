@@ -34,8 +34,8 @@
 // docs/performance.md for the commands and the measured tables.
 #include <benchmark/benchmark.h>
 
-#include <ctime>
 #include <cmath>
+#include <ctime>
 #include <memory>
 #include <string>
 #include <vector>
@@ -53,7 +53,9 @@ using namespace emdae;
 
 constexpr double kDt = 0.01;
 
-Material material_of(MaterialModel model) { return make_material(model, 100.0, 0.3, 1e-3); }
+Material material_of(MaterialModel model) {
+  return make_material(model, 100.0, 0.3, 1e-3);
+}
 
 const char* kind_name(GradientKind k) {
   switch (k) {
@@ -71,11 +73,13 @@ const char* kind_name(GradientKind k) {
 // sheared by a smooth wave; the step increment is a smooth field ~1e-3.
 Eigen::Vector2d deformed(const Eigen::Vector2d& x, double scale) {
   const double c = std::cos(0.3), s = std::sin(0.3);
-  const Eigen::Vector2d u(1.05 * x.x() + 0.02 * std::sin(x.y() / scale), x.y() + 0.02 * std::cos(x.x() / scale));
+  const Eigen::Vector2d u(1.05 * x.x() + 0.02 * std::sin(x.y() / scale),
+                          x.y() + 0.02 * std::cos(x.x() / scale));
   return Eigen::Vector2d(c * u.x() - s * u.y(), s * u.x() + c * u.y());
 }
 Eigen::Vector2d increment(const Eigen::Vector2d& x, double scale) {
-  return 1e-3 * Eigen::Vector2d(std::sin(0.7 * x.y() / scale) + 0.3, std::cos(1.3 * x.x() / scale) - 0.2);
+  return 1e-3 *
+         Eigen::Vector2d(std::sin(0.7 * x.y() / scale) + 0.3, std::cos(1.3 * x.x() / scale) - 0.2);
 }
 
 // One body on a rectangle of nx x ny unit elements and a step (q0 -> q1).
@@ -139,7 +143,8 @@ void bm_element(benchmark::State& st, MaterialModel model, GradientKind kind, bo
   Vec q0(8), q1(8), grad;
   Mat jac;
   for (int a = 0; a < 4; ++a) {
-    const Eigen::Vector2d x = mesh.nodes[static_cast<std::size_t>(mesh.quads[0][static_cast<std::size_t>(a)])];
+    const Eigen::Vector2d x =
+        mesh.nodes[static_cast<std::size_t>(mesh.quads[0][static_cast<std::size_t>(a)])];
     q1.segment<2>(2 * a) = deformed(x, 1.0);
     q0.segment<2>(2 * a) = q1.segment<2>(2 * a) - increment(x, 1.0);
   }
@@ -229,18 +234,20 @@ int main(int argc, char** argv) {
   benchmark::Initialize(&argc, argv);
   if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
 
-  const std::pair<MaterialModel, const char*> models[] = {{MaterialModel::SaintVenantKirchhoff, "svk"},
-                                                          {MaterialModel::NeoHooke, "neohooke"}};
-  const GradientKind kinds[] = {GradientKind::Exact, GradientKind::Midpoint, GradientKind::Discrete};
+  const std::pair<MaterialModel, const char*> models[] = {
+      {MaterialModel::SaintVenantKirchhoff, "svk"}, {MaterialModel::NeoHooke, "neohooke"}};
+  const GradientKind kinds[] = {GradientKind::Exact, GradientKind::Midpoint,
+                                GradientKind::Discrete};
   // nx x ny elements -> 2 (nx + 1)(ny + 1) dofs: 992, 3306, 10302, 32220,
   // 100854, 317964, 1003002.
-  const std::vector<std::pair<int, int>> meshes = {{15, 30},   {28, 56},   {50, 100}, {89, 178},
+  const std::vector<std::pair<int, int>> meshes = {{15, 30},   {28, 56},   {50, 100},  {89, 178},
                                                    {158, 316}, {281, 562}, {500, 1000}};
 
   for (const auto& [model, mname] : models)
     for (GradientKind kind : kinds)
       for (bool jac : {false, true}) {
-        const std::string name = std::string("element/") + mname + "/" + kind_name(kind) + (jac ? "/jac" : "");
+        const std::string name =
+            std::string("element/") + mname + "/" + kind_name(kind) + (jac ? "/jac" : "");
         benchmark::RegisterBenchmark(name.c_str(), bm_element, model, kind, jac);
       }
 

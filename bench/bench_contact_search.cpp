@@ -99,7 +99,9 @@ double thread_cpu_seconds() {
   return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
 }
 
-Eigen::Vector2d pos(const Vec& q, int node) { return q.segment<2>(2 * node); }
+Eigen::Vector2d pos(const Vec& q, int node) {
+  return q.segment<2>(2 * node);
+}
 
 // The search margin MortarContact::prepare uses (search_margin = 1, v = 0).
 double margin(const Scene& sc) {
@@ -174,9 +176,10 @@ void bm_prepare(benchmark::State& st, const std::string& kind) {
   long tests = 0;
   const std::vector<int> bf = brute_force_candidates(sc, tests);
   if (node_pairs(bf) != sc.contact->n_pairs()) {
-    st.SkipWithError(("pair count differs from brute force: " + std::to_string(sc.contact->n_pairs()) +
-                      " vs " + std::to_string(node_pairs(bf)))
-                         .c_str());
+    st.SkipWithError(
+        ("pair count differs from brute force: " + std::to_string(sc.contact->n_pairs()) + " vs " +
+         std::to_string(node_pairs(bf)))
+            .c_str());
   }
   st.counters["seg_pairs"] = static_cast<double>(sum(bf));
 }
@@ -204,10 +207,12 @@ void bm_grid(benchmark::State& st, const std::string& kind) {
   }
   set_common(st, sc);
   st.counters["seg_pairs"] = static_cast<double>(seg_pairs);
-  st.counters["tests_per_slave"] = static_cast<double>(grid.tests()) / static_cast<double>(sc.slave.edges.size());
+  st.counters["tests_per_slave"] =
+      static_cast<double>(grid.tests()) / static_cast<double>(sc.slave.edges.size());
   // Of the time per slave segment: the build's share (per master segment).
   using C = benchmark::Counter;
-  st.counters["build_per_master"] = C(t_build / static_cast<double>(sc.master.edges.size()), C::kAvgIterations);
+  st.counters["build_per_master"] =
+      C(t_build / static_cast<double>(sc.master.edges.size()), C::kAvgIterations);
 }
 
 void bm_brute(benchmark::State& st, const std::string& kind) {
@@ -221,7 +226,8 @@ void bm_brute(benchmark::State& st, const std::string& kind) {
   set_common(st, sc);
   st.counters["seg_pairs"] = static_cast<double>(sum(bf));
   st.counters["pairs"] = static_cast<double>(node_pairs(bf));
-  st.counters["tests_per_slave"] = static_cast<double>(tests) / static_cast<double>(sc.slave.edges.size());
+  st.counters["tests_per_slave"] =
+      static_cast<double>(tests) / static_cast<double>(sc.slave.edges.size());
 }
 
 }  // namespace
@@ -232,9 +238,18 @@ int main(int argc, char** argv) {
   for (const std::string kind : {"strips", "rings"})
     for (int k = 6; k <= 14; ++k) {
       const long n = 1L << k;
-      benchmark::RegisterBenchmark(("prepare/" + kind).c_str(), bm_prepare, kind)->Arg(n)->ArgName("n")->Unit(benchmark::kMicrosecond);
-      benchmark::RegisterBenchmark(("grid/" + kind).c_str(), bm_grid, kind)->Arg(n)->ArgName("n")->Unit(benchmark::kMicrosecond);
-      benchmark::RegisterBenchmark(("brute/" + kind).c_str(), bm_brute, kind)->Arg(n)->ArgName("n")->Unit(benchmark::kMicrosecond);
+      benchmark::RegisterBenchmark(("prepare/" + kind).c_str(), bm_prepare, kind)
+          ->Arg(n)
+          ->ArgName("n")
+          ->Unit(benchmark::kMicrosecond);
+      benchmark::RegisterBenchmark(("grid/" + kind).c_str(), bm_grid, kind)
+          ->Arg(n)
+          ->ArgName("n")
+          ->Unit(benchmark::kMicrosecond);
+      benchmark::RegisterBenchmark(("brute/" + kind).c_str(), bm_brute, kind)
+          ->Arg(n)
+          ->ArgName("n")
+          ->Unit(benchmark::kMicrosecond);
     }
   benchmark::RunSpecifiedBenchmarks();
   benchmark::Shutdown();

@@ -106,9 +106,10 @@ F real(const char* name) {
 // --- interposed KLU entry points ------------------------------------------------
 extern "C" {
 
-klu_l_symbolic* klu_l_analyze(SuiteSparse_long n, SuiteSparse_long* ap, SuiteSparse_long* ai, klu_l_common* c) {
-  static auto f = real<klu_l_symbolic* (*)(SuiteSparse_long, SuiteSparse_long*, SuiteSparse_long*, klu_l_common*)>(
-      "klu_l_analyze");
+klu_l_symbolic* klu_l_analyze(SuiteSparse_long n, SuiteSparse_long* ap, SuiteSparse_long* ai,
+                              klu_l_common* c) {
+  static auto f = real<klu_l_symbolic* (*)(SuiteSparse_long, SuiteSparse_long*, SuiteSparse_long*,
+                                           klu_l_common*)>("klu_l_analyze");
   ++g.analyze;
   g.refactor_pending = false;
   last_n = n;
@@ -118,10 +119,10 @@ klu_l_symbolic* klu_l_analyze(SuiteSparse_long n, SuiteSparse_long* ap, SuiteSpa
   return r;
 }
 
-klu_l_numeric* klu_l_factor(SuiteSparse_long* ap, SuiteSparse_long* ai, double* ax, klu_l_symbolic* s,
-                            klu_l_common* c) {
-  static auto f = real<klu_l_numeric* (*)(SuiteSparse_long*, SuiteSparse_long*, double*, klu_l_symbolic*,
-                                          klu_l_common*)>("klu_l_factor");
+klu_l_numeric* klu_l_factor(SuiteSparse_long* ap, SuiteSparse_long* ai, double* ax,
+                            klu_l_symbolic* s, klu_l_common* c) {
+  static auto f = real<klu_l_numeric* (*)(SuiteSparse_long*, SuiteSparse_long*, double*,
+                                          klu_l_symbolic*, klu_l_common*)>("klu_l_factor");
   ++g.factor;
   if (g.refactor_pending) ++g.full_after_refactor;
   g.refactor_pending = false;
@@ -131,10 +132,11 @@ klu_l_numeric* klu_l_factor(SuiteSparse_long* ap, SuiteSparse_long* ai, double* 
   return r;
 }
 
-SuiteSparse_long klu_l_refactor(SuiteSparse_long* ap, SuiteSparse_long* ai, double* ax, klu_l_symbolic* s,
-                                klu_l_numeric* num, klu_l_common* c) {
-  static auto f = real<SuiteSparse_long (*)(SuiteSparse_long*, SuiteSparse_long*, double*, klu_l_symbolic*,
-                                            klu_l_numeric*, klu_l_common*)>("klu_l_refactor");
+SuiteSparse_long klu_l_refactor(SuiteSparse_long* ap, SuiteSparse_long* ai, double* ax,
+                                klu_l_symbolic* s, klu_l_numeric* num, klu_l_common* c) {
+  static auto f =
+      real<SuiteSparse_long (*)(SuiteSparse_long*, SuiteSparse_long*, double*, klu_l_symbolic*,
+                                klu_l_numeric*, klu_l_common*)>("klu_l_refactor");
   ++g.refactor;
   g.refactor_pending = true;
   last_ap = ap;
@@ -148,7 +150,8 @@ SuiteSparse_long klu_l_refactor(SuiteSparse_long* ap, SuiteSparse_long* ai, doub
 }
 
 SuiteSparse_long klu_l_rcond(klu_l_symbolic* s, klu_l_numeric* num, klu_l_common* c) {
-  static auto f = real<SuiteSparse_long (*)(klu_l_symbolic*, klu_l_numeric*, klu_l_common*)>("klu_l_rcond");
+  static auto f =
+      real<SuiteSparse_long (*)(klu_l_symbolic*, klu_l_numeric*, klu_l_common*)>("klu_l_rcond");
   const SuiteSparse_long r = f(s, num, c);
   if (shadow.on && last_ap) shadow_check(s->n, last_ap, last_ai, last_ax);
   if (cap.armed && !cap.over && last_ap && c->rcond < cap.rcond) {
@@ -168,10 +171,10 @@ SuiteSparse_long klu_l_rcond(klu_l_symbolic* s, klu_l_numeric* num, klu_l_common
   return r;
 }
 
-SuiteSparse_long klu_l_condest(SuiteSparse_long* ap, double* ax, klu_l_symbolic* s, klu_l_numeric* num,
-                               klu_l_common* c) {
-  static auto f = real<SuiteSparse_long (*)(SuiteSparse_long*, double*, klu_l_symbolic*, klu_l_numeric*,
-                                            klu_l_common*)>("klu_l_condest");
+SuiteSparse_long klu_l_condest(SuiteSparse_long* ap, double* ax, klu_l_symbolic* s,
+                               klu_l_numeric* num, klu_l_common* c) {
+  static auto f = real<SuiteSparse_long (*)(SuiteSparse_long*, double*, klu_l_symbolic*,
+                                            klu_l_numeric*, klu_l_common*)>("klu_l_condest");
   const double t0 = thread_cpu();
   const SuiteSparse_long r = f(ap, ax, s, num, c);
   g.t_condest += thread_cpu() - t0;
@@ -206,30 +209,34 @@ void reset() {
 
 void report(const char* phase) {
   const long setups_refactored = g.refactor;
-  std::printf("  %-34s analyses %4ld  factor %5ld  refactor %5ld  rcond<eps^2/3 %5ld  condest %5ld  "
-              "full factor after refactor %5ld (%.0f %%)\n",
-              phase, g.analyze, g.factor, g.refactor, g.rcond_low, g.condest, g.full_after_refactor,
-              setups_refactored ? 100.0 * static_cast<double>(g.full_after_refactor) / static_cast<double>(setups_refactored) : 0.0);
-  if (g.refactor)
-    std::printf("  %-34s rcond in [%.2e, %.2e]", "", g.rcond_min, g.rcond_max);
+  std::printf(
+      "  %-34s analyses %4ld  factor %5ld  refactor %5ld  rcond<eps^2/3 %5ld  condest %5ld  "
+      "full factor after refactor %5ld (%.0f %%)\n",
+      phase, g.analyze, g.factor, g.refactor, g.rcond_low, g.condest, g.full_after_refactor,
+      setups_refactored ? 100.0 * static_cast<double>(g.full_after_refactor) /
+                              static_cast<double>(setups_refactored)
+                        : 0.0);
+  if (g.refactor) std::printf("  %-34s rcond in [%.2e, %.2e]", "", g.rcond_min, g.rcond_max);
   if (g.condest) std::printf("   condest in [%.2e, %.2e]", g.condest_min, g.condest_max);
   if (g.refactor) std::printf("   (thresholds %.2e, %.2e)\n", kUround23, 1.0 / kUround23);
-  std::printf("  %-34s CPU s: analyze %.3f  factor %.3f  refactor %.3f  condest %.3f\n", "", g.t_analyze,
-              g.t_factor, g.t_refactor, g.t_condest);
+  std::printf("  %-34s CPU s: analyze %.3f  factor %.3f  refactor %.3f  condest %.3f\n", "",
+              g.t_analyze, g.t_factor, g.t_refactor, g.t_condest);
   std::fflush(stdout);
 }
 
 // --- analysis of the captured matrix ----------------------------------------------
 
-double klu_condest_of(long n, std::vector<long> ap, std::vector<long> ai, std::vector<double> ax, double* rcond,
-                      int ordering, bool verbose) {
-  static auto analyze = real<klu_l_symbolic* (*)(SuiteSparse_long, SuiteSparse_long*, SuiteSparse_long*,
-                                                 klu_l_common*)>("klu_l_analyze");
-  static auto factor = real<klu_l_numeric* (*)(SuiteSparse_long*, SuiteSparse_long*, double*, klu_l_symbolic*,
-                                               klu_l_common*)>("klu_l_factor");
-  static auto rc = real<SuiteSparse_long (*)(klu_l_symbolic*, klu_l_numeric*, klu_l_common*)>("klu_l_rcond");
-  static auto ce = real<SuiteSparse_long (*)(SuiteSparse_long*, double*, klu_l_symbolic*, klu_l_numeric*,
-                                             klu_l_common*)>("klu_l_condest");
+double klu_condest_of(long n, std::vector<long> ap, std::vector<long> ai, std::vector<double> ax,
+                      double* rcond, int ordering, bool verbose) {
+  static auto analyze =
+      real<klu_l_symbolic* (*)(SuiteSparse_long, SuiteSparse_long*, SuiteSparse_long*,
+                               klu_l_common*)>("klu_l_analyze");
+  static auto factor = real<klu_l_numeric* (*)(SuiteSparse_long*, SuiteSparse_long*, double*,
+                                               klu_l_symbolic*, klu_l_common*)>("klu_l_factor");
+  static auto rc =
+      real<SuiteSparse_long (*)(klu_l_symbolic*, klu_l_numeric*, klu_l_common*)>("klu_l_rcond");
+  static auto ce = real<SuiteSparse_long (*)(SuiteSparse_long*, double*, klu_l_symbolic*,
+                                             klu_l_numeric*, klu_l_common*)>("klu_l_condest");
   klu_l_common c;
   klu_l_defaults(&c);
   c.ordering = ordering;
@@ -246,16 +253,19 @@ double klu_condest_of(long n, std::vector<long> ap, std::vector<long> ai, std::v
     if (rcond) *rcond = c.rcond;
     klu_l_flops(s, num, &c);
     if (verbose)
-      std::printf("      (ordering %s: nnz(L) %.0f, nnz(U) %.0f, flops %.3g; analyze %.2f ms, factor %.2f ms)\n",
-                  ordering == 0 ? "AMD" : "COLAMD", static_cast<double>(num->lnz), static_cast<double>(num->unz),
-                  c.flops, 1e3 * (t1 - t0), 1e3 * (t2 - t1));
+      std::printf(
+          "      (ordering %s: nnz(L) %.0f, nnz(U) %.0f, flops %.3g; analyze %.2f ms, factor %.2f "
+          "ms)\n",
+          ordering == 0 ? "AMD" : "COLAMD", static_cast<double>(num->lnz),
+          static_cast<double>(num->unz), c.flops, 1e3 * (t1 - t0), 1e3 * (t2 - t1));
     klu_l_free_numeric(&num, &c);
   }
   if (s) klu_l_free_symbolic(&s, &c);
   return cond;
 }
 
-void shadow_check(long n, const SuiteSparse_long* ap, const SuiteSparse_long* ai, const double* ax) {
+void shadow_check(long n, const SuiteSparse_long* ap, const SuiteSparse_long* ai,
+                  const double* ax) {
   const bool was_on = shadow.on;
   shadow.on = false;  // the check's own factorizations are not counted
   const long nd = shadow.n_dofs, nnz = ap[n];
@@ -271,7 +281,8 @@ void shadow_check(long n, const SuiteSparse_long* ap, const SuiteSparse_long* ai
       for (long k = p[static_cast<std::size_t>(j)]; k < p[static_cast<std::size_t>(j) + 1]; ++k) {
         const long r = i[static_cast<std::size_t>(k)];
         if (r >= nd || j >= nd) x[static_cast<std::size_t>(k)] /= kappa;
-        if (r < nd && r == j && (*shadow.fixed)[static_cast<std::size_t>(r)]) x[static_cast<std::size_t>(k)] = 1.0;
+        if (r < nd && r == j && (*shadow.fixed)[static_cast<std::size_t>(r)])
+          x[static_cast<std::size_t>(k)] = 1.0;
       }
     double rc = 0;
     const double ce = klu_condest_of(n, p, i, x, &rc, 0, false);
@@ -303,15 +314,20 @@ void analyse(const Captured& m, const System& s, const std::string& dump) {
   const long n = m.n;
   const int nd = s.n_dofs();
   const auto& fixed = s.is_prescribed();
-  std::printf("\n  analysed Jacobian (%s): n = %ld (%d dofs + %ld multipliers), nnz = %zu; in the run: rcond %.2e, "
-              "condest %.2e\n",
-              m.over ? "first to fail the check" : "lowest rcond of the run", n, nd, n - nd, m.ax.size(), m.rcond,
-              m.condest);
+  std::printf(
+      "\n  analysed Jacobian (%s): n = %ld (%d dofs + %ld multipliers), nnz = %zu; in the run: "
+      "rcond %.2e, "
+      "condest %.2e\n",
+      m.over ? "first to fail the check" : "lowest rcond of the run", n, nd, n - nd, m.ax.size(),
+      m.rcond, m.condest);
   if (!dump.empty()) {
     std::ofstream f(dump);
-    f << "%%MatrixMarket matrix coordinate real general\n" << n << ' ' << n << ' ' << m.ax.size() << '\n';
+    f << "%%MatrixMarket matrix coordinate real general\n"
+      << n << ' ' << n << ' ' << m.ax.size() << '\n';
     f.precision(17);
-    for_entries(m, [&](long i, long j, std::size_t k) { f << i + 1 << ' ' << j + 1 << ' ' << m.ax[k] << '\n'; });
+    for_entries(m, [&](long i, long j, std::size_t k) {
+      f << i + 1 << ' ' << j + 1 << ' ' << m.ax[k] << '\n';
+    });
     std::printf("  written to %s\n", dump.c_str());
   }
   // Magnitudes by block; kappa = the diagonal of a prescribed row (see
@@ -332,20 +348,26 @@ void analyse(const Captured& m, const System& s, const std::string& dump) {
       gmin = std::min(gmin, v);
     }
   });
-  std::printf("  free rows: |A| max %.3e, min |A_ii| %.3e; constraint rows/columns |kappa G| in [%.3e, %.3e]; "
-              "prescribed rows kappa = %.3e\n",
-              amax, adiag_min, gmin, gmax, kappa);
+  std::printf(
+      "  free rows: |A| max %.3e, min |A_ii| %.3e; constraint rows/columns |kappa G| in [%.3e, "
+      "%.3e]; "
+      "prescribed rows kappa = %.3e\n",
+      amax, adiag_min, gmin, gmax, kappa);
   // Per constraint row: its largest entry (|kappa dPhi_l/dq|_inf).
   std::vector<double> row_max(static_cast<std::size_t>(n - nd), 0.0);
   for_entries(m, [&](long i, long, std::size_t k) {
-    if (i >= nd) row_max[static_cast<std::size_t>(i - nd)] = std::max(row_max[static_cast<std::size_t>(i - nd)], std::abs(m.ax[k]));
+    if (i >= nd)
+      row_max[static_cast<std::size_t>(i - nd)] =
+          std::max(row_max[static_cast<std::size_t>(i - nd)], std::abs(m.ax[k]));
   });
   if (!row_max.empty()) {
     std::vector<double> sorted = row_max;
     std::sort(sorted.begin(), sorted.end());
     std::printf("  constraint rows, max |kappa dPhi/dq| per row / kappa: smallest");
-    for (std::size_t k = 0; k < std::min<std::size_t>(4, sorted.size()); ++k) std::printf(" %.2e", sorted[k] / kappa);
-    std::printf(", median %.2e, largest %.2e\n", sorted[sorted.size() / 2] / kappa, sorted.back() / kappa);
+    for (std::size_t k = 0; k < std::min<std::size_t>(4, sorted.size()); ++k)
+      std::printf(" %.2e", sorted[k] / kappa);
+    std::printf(", median %.2e, largest %.2e\n", sorted[sorted.size() / 2] / kappa,
+                sorted.back() / kappa);
   }
 
   // Variants of the same matrix.
@@ -387,10 +409,12 @@ void analyse(const Captured& m, const System& s, const std::string& dump) {
     double rc = 0;
     std::printf("  %-42s\n", v.name.c_str());
     const double ce = klu_condest_of(n, m.ap, m.ai, v.ax, &rc, 0, true);
-    if (&v == &variants.front()) klu_condest_of(n, m.ap, m.ai, v.ax, nullptr, 1, true);  // fill with COLAMD
+    if (&v == &variants.front())
+      klu_condest_of(n, m.ap, m.ai, v.ax, nullptr, 1, true);  // fill with COLAMD
     std::printf("      KLU (AMD): rcond %.3e  condest %.3e  -> %s\n", rc, ce,
                 rc >= kUround23 ? "refactor kept (rcond above eps^2/3)"
-                                : (ce > 1.0 / kUround23 ? "full factor (condest above 1/eps^2/3)" : "refactor kept"));
+                                : (ce > 1.0 / kUround23 ? "full factor (condest above 1/eps^2/3)"
+                                                        : "refactor kept"));
     if (n > 4000) continue;
     Eigen::BDCSVD<Eigen::MatrixXd> svd(dense(m, v.ax), Eigen::ComputeFullV);
     const Eigen::VectorXd& sv = svd.singularValues();
@@ -405,22 +429,28 @@ void analyse(const Captured& m, const System& s, const std::string& dump) {
       else
         w_free += e;
     }
-    std::printf("      dense SVD: sigma_max %.3e, sigma_min %.3e, cond_2 %.3e; sigma_min's vector %.0f %% free dofs, "
-                "%.0f %% prescribed, %.0f %% multipliers\n",
-                sv[0], sv[n - 1], sv[0] / sv[n - 1], 100 * w_free, 100 * w_fixed, 100 * w_mult);
+    std::printf(
+        "      dense SVD: sigma_max %.3e, sigma_min %.3e, cond_2 %.3e; sigma_min's vector %.0f %% "
+        "free dofs, "
+        "%.0f %% prescribed, %.0f %% multipliers\n",
+        sv[0], sv[n - 1], sv[0] / sv[n - 1], 100 * w_free, 100 * w_fixed, 100 * w_mult);
   }
 }
 
 // --- scenes ---------------------------------------------------------------------
 
-RunOutcome run_dynamics(const System& s, State& st, double dt, double t_end, const SchemeSettings& ss = {},
+RunOutcome run_dynamics(const System& s, State& st, double dt, double t_end,
+                        const SchemeSettings& ss = {},
                         NewtonSettings ns = NewtonSettings{1e-10, 25, false}) {
   auto stepper = make_stepper("em", s, ns, ss);
-  return integrate(*stepper, st, TimeSettings{dt, t_end, dt / 64}, [](const State&, const AcceptedStep&) {});
+  return integrate(*stepper, st, TimeSettings{dt, t_end, dt / 64},
+                   [](const State&, const AcceptedStep&) {});
 }
 
 void bearing_scene(const std::string& dump) {
-  std::printf("\nbearing (paper §5.1, E = 1e5): static prestress, then em dt = 0.01 to t = 2 (torque on [0, 0.5])\n");
+  std::printf(
+      "\nbearing (paper §5.1, E = 1e5): static prestress, then em dt = 0.01 to t = 2 (torque on "
+      "[0, 0.5])\n");
   test_systems::Bearing b = test_systems::bearing();
   const System& s = *b.system;
   State st = initial_state(s);
@@ -429,8 +459,9 @@ void bearing_scene(const std::string& dump) {
   StaticSettings ss;
   ss.newton.tolerance = 1e-11;
   const StaticResult sr = solve_static(*b.system, st, ss, {b.inner_surface});
-  std::printf("  static: %s, %d pseudo steps, %ld Newton iterations, %zu active\n", sr.converged ? "converged" : sr.message.c_str(),
-              sr.steps, sr.newton_iterations, st.active.size());
+  std::printf("  static: %s, %d pseudo steps, %ld Newton iterations, %zu active\n",
+              sr.converged ? "converged" : sr.message.c_str(), sr.steps, sr.newton_iterations,
+              st.active.size());
   report("static solve");
   reset();
   cap = Captured{};
@@ -441,29 +472,37 @@ void bearing_scene(const std::string& dump) {
   shadow.fixed = &s.is_prescribed();
   const double c0 = thread_cpu();
   const RunOutcome out = run_dynamics(s, st, 0.01, 2.0);
-  std::printf("  dynamics: %s, %ld steps, %ld Newton iterations, %.2f s CPU in all\n", out.message.c_str(), out.steps,
-              out.newton_iterations, thread_cpu() - c0);
+  std::printf("  dynamics: %s, %ld steps, %ld Newton iterations, %.2f s CPU in all\n",
+              out.message.c_str(), out.steps, out.newton_iterations, thread_cpu() - c0);
   shadow.on = false;
   report("em dynamics");
-  std::printf("  %-34s without kappa, the same %ld Jacobians: %ld would fail the check (full factor), condest in "
-              "[%.2e, %.2e]\n",
-              "", shadow.checked, shadow.would_refactor_fail, shadow.condest_min, shadow.condest_max);
+  std::printf(
+      "  %-34s without kappa, the same %ld Jacobians: %ld would fail the check (full factor), "
+      "condest in "
+      "[%.2e, %.2e]\n",
+      "", shadow.checked, shadow.would_refactor_fail, shadow.condest_min, shadow.condest_max);
   cap.armed = false;
   if (cap.have) analyse(cap, s, dump);
 }
 
 void impact_scene() {
-  std::printf("\ntwo-ring impact ring_impact(120, 10, 20, 64, 1, 47, 50), em dt = 0.01 to t = 8 (contact from 6.1)\n");
+  std::printf(
+      "\ntwo-ring impact ring_impact(120, 10, 20, 64, 1, 47, 50), em dt = 0.01 to t = 8 (contact "
+      "from 6.1)\n");
   const auto scene = test_systems::ring_impact(120, 10, 20, 64, 1, 47, 50);
   State st = initial_state(*scene.system);
   reset();
-  const RunOutcome out = run_dynamics(*scene.system, st, 0.01, 8.0, {}, NewtonSettings{1e-11, 25, false});
-  std::printf("  dynamics: %s, %ld steps, %ld Newton iterations\n", out.message.c_str(), out.steps, out.newton_iterations);
+  const RunOutcome out =
+      run_dynamics(*scene.system, st, 0.01, 8.0, {}, NewtonSettings{1e-11, 25, false});
+  std::printf("  dynamics: %s, %ld steps, %ld Newton iterations\n", out.message.c_str(), out.steps,
+              out.newton_iterations);
   report("em dynamics");
 }
 
 void ring_scene() {
-  std::printf("\nfree SVK ring (bearing material E = 1e5, 40 x 10 elements), no constraints, em dt = 0.01 to t = 0.5\n");
+  std::printf(
+      "\nfree SVK ring (bearing material E = 1e5, 40 x 10 elements), no constraints, em dt = 0.01 "
+      "to t = 0.5\n");
   System s(2);
   const Material mat = make_material(MaterialModel::SaintVenantKirchhoff, 1e5, 0.1, 0.001);
   BodyOptions o;
@@ -472,7 +511,8 @@ void ring_scene() {
   State st = initial_state(s);
   reset();
   const RunOutcome out = run_dynamics(s, st, 0.01, 0.5);
-  std::printf("  dynamics: %s, %ld steps, %ld Newton iterations\n", out.message.c_str(), out.steps, out.newton_iterations);
+  std::printf("  dynamics: %s, %ld steps, %ld Newton iterations\n", out.message.c_str(), out.steps,
+              out.newton_iterations);
   report("em dynamics");
 }
 
@@ -491,8 +531,10 @@ int main(int argc, char** argv) {
       return 2;
     }
   }
-  std::printf("SUNLinSol_KLU refactor check: rcond < eps^(2/3) = %.3e, then condest > %.3e -> full klu_factor\n",
-              kUround23, 1.0 / kUround23);
+  std::printf(
+      "SUNLinSol_KLU refactor check: rcond < eps^(2/3) = %.3e, then condest > %.3e -> full "
+      "klu_factor\n",
+      kUround23, 1.0 / kUround23);
   if (which == "all" || which == "ring") ring_scene();
   if (which == "all" || which == "impact") impact_scene();
   if (which == "all" || which == "bearing") bearing_scene(dump);

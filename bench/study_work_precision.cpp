@@ -39,6 +39,7 @@
 #include <gsl/gsl_errno.h>
 #include <gsl/gsl_odeiv2.h>
 
+#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -51,8 +52,6 @@
 #include <stdexcept>
 #include <string>
 #include <vector>
-
-#include <Eigen/Eigenvalues>
 
 #include "contact_systems.hpp"
 #include "core/assembly.hpp"
@@ -67,7 +66,9 @@ namespace {
 
 using namespace emdae;
 
-double cpu_seconds() { return static_cast<double>(std::clock()) / CLOCKS_PER_SEC; }
+double cpu_seconds() {
+  return static_cast<double>(std::clock()) / CLOCKS_PER_SEC;
+}
 
 // --- one run of one scheme ----------------------------------------------------
 
@@ -90,11 +91,13 @@ struct RunResult {
 
 double max_nodal_distance(const Vec& a, const Vec& b) {
   double d = 0.0;
-  for (Eigen::Index n = 0; n < a.size() / 2; ++n) d = std::max(d, (a.segment<2>(2 * n) - b.segment<2>(2 * n)).norm());
+  for (Eigen::Index n = 0; n < a.size() / 2; ++n)
+    d = std::max(d, (a.segment<2>(2 * n) - b.segment<2>(2 * n)).norm());
   return d;
 }
 
-RunResult run(const System& s, const RunSpec& spec, double t_end, double energy_scale, const Vec* q_ref) {
+RunResult run(const System& s, const RunSpec& spec, double t_end, double energy_scale,
+              const Vec* q_ref) {
   SchemeSettings ss;
   ss.rtol = ss.atol = spec.tol;
   ss.rho_inf = 0.9;
@@ -105,11 +108,11 @@ RunResult run(const System& s, const RunSpec& spec, double t_end, double energy_
   RunResult r;
   r.spec = spec;
   const double c0 = cpu_seconds();
-  const RunOutcome out = integrate(*stepper, st, TimeSettings{spec.dt, t_end, 0.0},
-                                   [&](const State& x, const AcceptedStep&) {
-                                     const double h = measure(s, x.q, x.v, x.t).total();
-                                     r.energy_err = std::max(r.energy_err, std::abs(h - h0) / energy_scale);
-                                   });
+  const RunOutcome out = integrate(
+      *stepper, st, TimeSettings{spec.dt, t_end, 0.0}, [&](const State& x, const AcceptedStep&) {
+        const double h = measure(s, x.q, x.v, x.t).total();
+        r.energy_err = std::max(r.energy_err, std::abs(h - h0) / energy_scale);
+      });
   r.cpu = cpu_seconds() - c0;
   r.ok = out.ok && std::abs(st.t - t_end) < 1e-9 * std::max(1.0, t_end);
   r.message = out.message;
@@ -131,20 +134,25 @@ int double_pendulum_rhs(double, const double y[], double dydt[], void*) {
   dydt[0] = w1;
   dydt[1] = w2;
   dydt[2] = (-3.0 * g * std::sin(t1) - g * std::sin(t1 - 2.0 * t2) -
-             2.0 * std::sin(d) * (w2 * w2 + w1 * w1 * std::cos(d))) / den;
-  dydt[3] = 2.0 * std::sin(d) * (2.0 * w1 * w1 + 2.0 * g * std::cos(t1) + w2 * w2 * std::cos(d)) / den;
+             2.0 * std::sin(d) * (w2 * w2 + w1 * w1 * std::cos(d))) /
+            den;
+  dydt[3] =
+      2.0 * std::sin(d) * (2.0 * w1 * w1 + 2.0 * g * std::cos(t1) + w2 * w2 * std::cos(d)) / den;
   return GSL_SUCCESS;
 }
 
 Vec double_pendulum_reference(double t_end) {
   gsl_odeiv2_system sys{double_pendulum_rhs, nullptr, 4, nullptr};
-  gsl_odeiv2_driver* drv = gsl_odeiv2_driver_alloc_y_new(&sys, gsl_odeiv2_step_rk8pd, 1e-4, 1e-13, 1e-13);
+  gsl_odeiv2_driver* drv =
+      gsl_odeiv2_driver_alloc_y_new(&sys, gsl_odeiv2_step_rk8pd, 1e-4, 1e-13, 1e-13);
   double y[4] = {2.0, 1.0, 0.0, 0.0}, t = 0.0;
   const int status = gsl_odeiv2_driver_apply(drv, &t, t_end, y);
   gsl_odeiv2_driver_free(drv);
-  if (status != GSL_SUCCESS) throw std::runtime_error("GSL reference of the double pendulum failed");
+  if (status != GSL_SUCCESS)
+    throw std::runtime_error("GSL reference of the double pendulum failed");
   Vec q(4);
-  q << std::sin(y[0]), -std::cos(y[0]), std::sin(y[0]) + std::sin(y[1]), -std::cos(y[0]) - std::cos(y[1]);
+  q << std::sin(y[0]), -std::cos(y[0]), std::sin(y[0]) + std::sin(y[1]),
+      -std::cos(y[0]) - std::cos(y[1]);
   return q;
 }
 
@@ -163,8 +171,9 @@ std::unique_ptr<System> free_ring() {
   for (int n = 0; n < s->n_nodes(); ++n) {
     const Eigen::Vector2d x = s->initial_positions().segment<2>(2 * n);
     const double th = std::atan2(x.y(), x.x());
-    const Eigen::Vector2d v = s->initial_velocities().segment<2>(2 * n) +
-                              10.0 * std::cos(2.0 * th) * Eigen::Vector2d(std::cos(th), std::sin(th));
+    const Eigen::Vector2d v =
+        s->initial_velocities().segment<2>(2 * n) +
+        10.0 * std::cos(2.0 * th) * Eigen::Vector2d(std::cos(th), std::sin(th));
     s->set_initial_velocity(n, v);
   }
   return s;
@@ -183,12 +192,12 @@ std::string param_string(const RunSpec& sp) {
 
 void print_table(const std::string& title, const std::vector<RunResult>& rs) {
   std::printf("\n%s\n", title.c_str());
-  std::printf("%-9s %-12s %12s %12s %10s %9s %8s %8s  %s\n", "scheme", "dt/tol", "error", "energy err",
-              "CPU s", "Newton", "steps", "cutback", "status");
+  std::printf("%-9s %-12s %12s %12s %10s %9s %8s %8s  %s\n", "scheme", "dt/tol", "error",
+              "energy err", "CPU s", "Newton", "steps", "cutback", "status");
   for (const auto& r : rs)
     std::printf("%-9s %-12s %12.3e %12.3e %10.4f %9ld %8ld %8ld  %s\n", r.spec.scheme.c_str(),
-                param_string(r.spec).c_str(), r.error, r.energy_err, r.cpu, r.newton, r.steps, r.cutbacks,
-                r.ok ? "ok" : r.message.c_str());
+                param_string(r.spec).c_str(), r.error, r.energy_err, r.cpu, r.newton, r.steps,
+                r.cutbacks, r.ok ? "ok" : r.message.c_str());
   std::fflush(stdout);
 }
 
@@ -200,9 +209,9 @@ void write_dat(const std::string& path, const std::string& what, const std::vect
   f.precision(6);
   for (const auto& r : rs)
     f << r.spec.scheme << ' ' << (r.spec.scheme == "ida" ? std::nan("") : r.spec.dt) << ' '
-      << (r.spec.scheme == "ida" ? r.spec.tol : std::nan("")) << ' ' << std::scientific << r.error << ' '
-      << r.energy_err << ' ' << r.cpu << std::defaultfloat << ' ' << r.newton << ' ' << r.steps << ' '
-      << r.cutbacks << ' ' << (r.ok ? 1 : 0) << '\n';
+      << (r.spec.scheme == "ida" ? r.spec.tol : std::nan("")) << ' ' << std::scientific << r.error
+      << ' ' << r.energy_err << ' ' << r.cpu << std::defaultfloat << ' ' << r.newton << ' '
+      << r.steps << ' ' << r.cutbacks << ' ' << (r.ok ? 1 : 0) << '\n';
   std::printf("wrote %s\n", path.c_str());
 }
 
@@ -217,7 +226,8 @@ void print_cheapest(const std::vector<RunResult>& rs, const std::vector<double>&
     for (const char* sc : schemes) {
       const RunResult* best = nullptr;
       for (const auto& r : rs)
-        if (r.spec.scheme == sc && r.ok && r.error <= target && (!best || r.cpu < best->cpu)) best = &r;
+        if (r.spec.scheme == sc && r.ok && r.error <= target && (!best || r.cpu < best->cpu))
+          best = &r;
       if (best)
         std::printf(" %9.4f (%-9s)", best->cpu, param_string(best->spec).c_str());
       else
@@ -227,7 +237,8 @@ void print_cheapest(const std::vector<RunResult>& rs, const std::vector<double>&
   }
 }
 
-std::vector<RunSpec> specs(const std::vector<double>& dts, const std::vector<double>& tols, double ida_output) {
+std::vector<RunSpec> specs(const std::vector<double>& dts, const std::vector<double>& tols,
+                           double ida_output) {
   std::vector<RunSpec> out;
   for (const char* sc : {"em", "midpoint", "galpha"})
     for (double dt : dts) out.push_back({sc, dt, 0.0});
@@ -236,7 +247,8 @@ std::vector<RunSpec> specs(const std::vector<double>& dts, const std::vector<dou
 }
 
 void study(const std::string& name, const std::string& title, const System& s, double t_end,
-           double energy_scale, const Vec& q_ref, const std::vector<RunSpec>& runs, const std::string& out_dir) {
+           double energy_scale, const Vec& q_ref, const std::vector<RunSpec>& runs,
+           const std::string& out_dir) {
   std::vector<RunResult> rs;
   for (const auto& sp : runs) {
     rs.push_back(run(s, sp, t_end, energy_scale, &q_ref));
@@ -257,12 +269,15 @@ void pendulum_part(bool quick, const std::string& out_dir) {
   const double v_min = 9.81 * (-1.0 - 2.0);
   // Check the reference against the energy-momentum scheme at a fine step.
   const RunResult fine = run(*s, {"em", 1e-4, 0.0}, t_end, h0 - v_min, &q_ref);
-  std::printf("double pendulum: H(0) = %.6f, energy scale H(0) - V_min = %.4f; GSL reference vs em dt=1e-4: %.2e\n",
-              h0, h0 - v_min, fine.error);
+  std::printf(
+      "double pendulum: H(0) = %.6f, energy scale H(0) - V_min = %.4f; GSL reference vs em "
+      "dt=1e-4: %.2e\n",
+      h0, h0 - v_min, fine.error);
   const auto runs = quick ? specs({0.02, 0.005, 0.001}, {1e-4, 1e-7}, 0.01)
                           : specs({0.05, 0.02, 0.01, 0.005, 0.002, 0.001, 5e-4, 2e-4},
                                   {1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10}, 0.01);
-  study("pendulum", "double pendulum, t_end = 2: error = max |q - q_ref| at t_end (GSL rk8pd reference)", *s,
+  study("pendulum",
+        "double pendulum, t_end = 2: error = max |q - q_ref| at t_end (GSL rk8pd reference)", *s,
         t_end, h0 - v_min, q_ref, runs, out_dir);
 }
 
@@ -295,18 +310,22 @@ void ring_part(bool quick, const std::string& out_dir) {
   if (!ref.ok) throw std::runtime_error("ring reference failed: " + ref.message);
   const RunResult half = run(*s, {"em", 2 * dt_ref, 0.0}, t_end, h0, &ref.final.q);
   const Vec q_ref = (4.0 * ref.final.q - half.final.q) / 3.0;
-  std::printf("\nNeo-Hooke ring: %d dofs, H(0) = %.6f; small-vibration frequencies: lowest elastic (ovalization) "
-              "%.2f rad/s (period %.3f), highest %.1f rad/s (period %.2e)\n"
-              "reference: em dt = %.2e and %.2e (%.1f + %.1f s CPU), Richardson-extrapolated; "
-              "|q(dt_ref) - q_ref| = %.2e, |q(2 dt_ref) - q_ref| = %.2e\n",
-              s->n_dofs(), h0, w_low, 2 * M_PI / w_low, w_high, 2 * M_PI / w_high, dt_ref, 2 * dt_ref, ref.cpu,
-              half.cpu, max_nodal_distance(ref.final.q, q_ref), max_nodal_distance(half.final.q, q_ref));
+  std::printf(
+      "\nNeo-Hooke ring: %d dofs, H(0) = %.6f; small-vibration frequencies: lowest elastic "
+      "(ovalization) "
+      "%.2f rad/s (period %.3f), highest %.1f rad/s (period %.2e)\n"
+      "reference: em dt = %.2e and %.2e (%.1f + %.1f s CPU), Richardson-extrapolated; "
+      "|q(dt_ref) - q_ref| = %.2e, |q(2 dt_ref) - q_ref| = %.2e\n",
+      s->n_dofs(), h0, w_low, 2 * M_PI / w_low, w_high, 2 * M_PI / w_high, dt_ref, 2 * dt_ref,
+      ref.cpu, half.cpu, max_nodal_distance(ref.final.q, q_ref),
+      max_nodal_distance(half.final.q, q_ref));
   const auto runs = quick ? specs({0.02, 0.005, 0.00125}, {1e-4, 1e-7}, 0.01)
-                          : specs({0.04, 0.02, 0.01, 0.005, 0.0025, 0.00125, 6.25e-4, 3.125e-4, 1.5625e-4,
-                                   7.8125e-5},
+                          : specs({0.04, 0.02, 0.01, 0.005, 0.0025, 0.00125, 6.25e-4, 3.125e-4,
+                                   1.5625e-4, 7.8125e-5},
                                   {1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8, 1e-9}, 0.01);
-  study("ring", "free Neo-Hooke ring, t_end = 1: error = max nodal |q - q_ref| at t_end (em reference)", *s, t_end,
-        h0, q_ref, runs, out_dir);
+  study("ring",
+        "free Neo-Hooke ring, t_end = 1: error = max nodal |q - q_ref| at t_end (em reference)", *s,
+        t_end, h0, q_ref, runs, out_dir);
 }
 
 // --- the two-ring impact ------------------------------------------------------------
@@ -348,7 +367,8 @@ ImpactRun impact_run(const std::string& scheme, bool locate, const std::string& 
                                             std::max(1.0, q0.linear_momentum.norm()));
         f.ang_err = std::max(f.ang_err, (q.angular_momentum - q0.angular_momentum).norm() /
                                             q0.angular_momentum.norm());
-        for (int id : x.active) f.active_gap = std::max(f.active_gap, std::abs(s.unilateral_gap(id, x.q)));
+        for (int id : x.active)
+          f.active_gap = std::max(f.active_gap, std::abs(s.unilateral_gap(id, x.q)));
         for (int id = 0; id < s.n_unilateral(); ++id)
           if (std::find(x.active.begin(), x.active.end(), id) == x.active.end())
             f.min_inactive_gap = std::min(f.min_inactive_gap, s.unilateral_gap(id, x.q));
@@ -359,7 +379,8 @@ ImpactRun impact_run(const std::string& scheme, bool locate, const std::string& 
           f.last_contact = x.t;
         }
         hist << x.t << ' ' << q.total() << ' ' << (q.total() - q0.total()) / q0.total() << ' '
-             << q.linear_momentum.norm() << ' ' << q.angular_momentum[0] << ' ' << x.active.size() << '\n';
+             << q.linear_momentum.norm() << ' ' << q.angular_momentum[0] << ' ' << x.active.size()
+             << '\n';
       });
   f.cpu = cpu_seconds() - c0;
   f.ok = out.ok;
@@ -377,25 +398,30 @@ void impact_part(bool quick, const std::string& out_dir) {
   rs.push_back(impact_run("em", true, "em", t_end, out_dir));
   rs.push_back(impact_run("midpoint", true, "midpoint", t_end, out_dir));
   rs.push_back(impact_run("em", false, "em-nolocate", t_end, out_dir));
-  std::printf("\ntwo-ring impact ring_impact(120, 10, 20, 64, 1, 47, 50), dt = 0.01, t_end = %g, Newton tol 1e-11\n"
-              "(errors are max over the run, relative: energy to H(0), momenta to max(1, |p(0)|) and |J(0)|)\n",
-              t_end);
-  std::printf("%-12s %10s %10s %10s %11s %12s %5s %16s %7s %7s %8s %6s %8s  %s\n", "scheme", "energy", "linear",
-              "angular", "act. gap", "min inact.", "act.", "contact window", "events", "steps", "Newton",
-              "cutbk", "CPU s", "status");
+  std::printf(
+      "\ntwo-ring impact ring_impact(120, 10, 20, 64, 1, 47, 50), dt = 0.01, t_end = %g, Newton "
+      "tol 1e-11\n"
+      "(errors are max over the run, relative: energy to H(0), momenta to max(1, |p(0)|) and "
+      "|J(0)|)\n",
+      t_end);
+  std::printf("%-12s %10s %10s %10s %11s %12s %5s %16s %7s %7s %8s %6s %8s  %s\n", "scheme",
+              "energy", "linear", "angular", "act. gap", "min inact.", "act.", "contact window",
+              "events", "steps", "Newton", "cutbk", "CPU s", "status");
   std::ofstream dat(out_dir + "/impact_summary.dat");
-  dat << "# scheme energy_err lin_err ang_err max_active_gap min_inactive_gap max_active first_contact "
+  dat << "# scheme energy_err lin_err ang_err max_active_gap min_inactive_gap max_active "
+         "first_contact "
          "last_contact events steps newton cutbacks cpu_s ok\n";
   for (const auto& f : rs) {
     char window[64];
     std::snprintf(window, sizeof window, "[%.2f, %.2f]", f.first_contact, f.last_contact);
-    std::printf("%-12s %10.2e %10.2e %10.2e %11.2e %12.2e %5d %16s %7ld %7ld %8ld %6ld %8.2f  %s\n", f.label.c_str(),
-                f.energy_err, f.lin_err, f.ang_err, f.active_gap, f.min_inactive_gap, f.max_active, window,
-                f.events, f.steps, f.newton, f.cutbacks, f.cpu, f.message.c_str());
-    dat << f.label << ' ' << f.energy_err << ' ' << f.lin_err << ' ' << f.ang_err << ' ' << f.active_gap << ' '
-        << f.min_inactive_gap << ' ' << f.max_active << ' ' << f.first_contact << ' ' << f.last_contact << ' '
-        << f.events << ' ' << f.steps << ' ' << f.newton << ' ' << f.cutbacks << ' ' << f.cpu << ' '
-        << (f.ok ? 1 : 0) << '\n';
+    std::printf("%-12s %10.2e %10.2e %10.2e %11.2e %12.2e %5d %16s %7ld %7ld %8ld %6ld %8.2f  %s\n",
+                f.label.c_str(), f.energy_err, f.lin_err, f.ang_err, f.active_gap,
+                f.min_inactive_gap, f.max_active, window, f.events, f.steps, f.newton, f.cutbacks,
+                f.cpu, f.message.c_str());
+    dat << f.label << ' ' << f.energy_err << ' ' << f.lin_err << ' ' << f.ang_err << ' '
+        << f.active_gap << ' ' << f.min_inactive_gap << ' ' << f.max_active << ' '
+        << f.first_contact << ' ' << f.last_contact << ' ' << f.events << ' ' << f.steps << ' '
+        << f.newton << ' ' << f.cutbacks << ' ' << f.cpu << ' ' << (f.ok ? 1 : 0) << '\n';
   }
   std::printf("wrote %s/impact_summary.dat and impact_<scheme>.dat\n", out_dir.c_str());
 }
@@ -414,7 +440,8 @@ int main(int argc, char** argv) {
     else if (a == "--quick")
       quick = true;
     else {
-      std::fprintf(stderr, "usage: %s [--part pendulum|ring|impact|all] [--out DIR] [--quick]\n", argv[0]);
+      std::fprintf(stderr, "usage: %s [--part pendulum|ring|impact|all] [--out DIR] [--quick]\n",
+                   argv[0]);
       return 2;
     }
   }

@@ -2,7 +2,6 @@
 
 #include <fmt/format.h>
 #include <fmt/ostream.h>
-
 #include <sys/ioctl.h>
 #include <unistd.h>
 
@@ -141,9 +140,9 @@ void print_summary(std::ostream& out, const Summary& s, const std::string& dir,
     for (std::size_t k = 0; k < st.holding_moments.size(); ++k)
       moments += fmt::format("{}{} {:.4g}", k ? ", " : "; holding moment of ", st.holds[k],
                              st.holding_moments[k]);
-    row("statics", fmt::format("{} ({} pseudo steps, {} Newton iterations, {} active contacts{})",
-                               st.message, st.steps, st.newton_iterations, st.active_contacts,
-                               moments));
+    row("statics",
+        fmt::format("{} ({} pseudo steps, {} Newton iterations, {} active contacts{})", st.message,
+                    st.steps, st.newton_iterations, st.active_contacts, moments));
   }
   // With loads the energy error is that of the load-free intervals, and the
   // balance H - H_0 = W is the figure for the rest.
@@ -164,8 +163,7 @@ void print_summary(std::ostream& out, const Summary& s, const std::string& dir,
   if (s.contact) {
     const ContactFigures& c = *s.contact;
     row("contact", c.first ? fmt::format("from t = {:.4g} to {:.4g}, at most {} active, {} events",
-                                         *c.first, *c.last, c.active_contacts_max,
-                                         c.contact_events)
+                                         *c.first, *c.last, c.active_contacts_max, c.contact_events)
                            : std::string("none"));
     row("gap violation, penetration",
         fmt::format("{:.3e}, {:.3e}", c.gap_violation_max, c.penetration_max));
@@ -176,8 +174,8 @@ void print_summary(std::ostream& out, const Summary& s, const std::string& dir,
     if (c.result == "fail") verdict = fmt::format("FAIL: {:.3e} > {}", *c.value, c.limit);
     row(("check " + c.name).c_str(), verdict);
   }
-  row("output", dir + "/{history.csv,summary.json,report.html" + (fields ? ",fields.pvd" : "") +
-                    "}");
+  row("output",
+      dir + "/{history.csv,summary.json,report.html" + (fields ? ",fields.pvd" : "") + "}");
 }
 
 // Progress of a run on stderr. On a terminal: one line redrawn in place
@@ -213,8 +211,9 @@ class Progress {
                                  ? duration(elapsed * (1 - fraction) / fraction)
                                  : "--";
     if (!tty_) {
-      fmt::print(err_, "emdae: {}t = {:.6g} / {} ({:.0f}%), step {}, Newton iterations {}, "
-                       "about {} left\n",
+      fmt::print(err_,
+                 "emdae: {}t = {:.6g} / {} ({:.0f}%), step {}, Newton iterations {}, "
+                 "about {} left\n",
                  label_, s.t, t_end_, 100 * fraction, s.step, newton_total, left);
       err_.flush();
       return;
@@ -302,10 +301,10 @@ int command_check(const std::string& scene_path, const std::vector<std::string>&
   } else {
     int body_nodes = 0;
     for (const auto& b : scene->bodies) body_nodes += b.n_nodes;
-    row("nodes", fmt::format("{} ({} in {} bod{}, {} particles, {} fixed)", sys.n_nodes(),
-                             body_nodes, scene->bodies.size(),
-                             scene->bodies.size() == 1 ? "y" : "ies", scene->particles.size(),
-                             fixed));
+    row("nodes",
+        fmt::format("{} ({} in {} bod{}, {} particles, {} fixed)", sys.n_nodes(), body_nodes,
+                    scene->bodies.size(), scene->bodies.size() == 1 ? "y" : "ies",
+                    scene->particles.size(), fixed));
   }
   for (const auto& b : scene->bodies)
     row("body", fmt::format("{}: {}; {} nodes, {} elements, mass {:.6g}; {}", b.name, b.mesh,
@@ -314,8 +313,8 @@ int command_check(const std::string& scene_path, const std::vector<std::string>&
                           sys.n_dofs() - static_cast<int>(sys.prescribed().size()),
                           sys.prescribed().size()));
   for (const auto& d : scene->dirichlet)
-    row("dirichlet", fmt::format("{}: {}, {} nodes, {} dofs", d.nodes, d.what, d.n_nodes,
-                                 d.n_dofs));
+    row("dirichlet",
+        fmt::format("{}: {}, {} nodes, {} dofs", d.nodes, d.what, d.n_nodes, d.n_dofs));
   row("constraints", count_by_kind(sys.constraints()));
   row("potentials", count_by_kind(sys.potentials()));
   for (const auto& pair : scene->contacts)
@@ -323,8 +322,7 @@ int command_check(const std::string& scene_path, const std::vector<std::string>&
                                pair.name, pair.slave, pair.slave_segments, pair.candidates,
                                pair.master, pair.master_segments));
   for (const auto& l : scene->loads)
-    row("load", fmt::format("{}: {} on {}, times {}", l.name, l.magnitude, l.on,
-                            l.time_function));
+    row("load", fmt::format("{}: {} on {}, times {}", l.name, l.magnitude, l.on, l.time_function));
   if (scene->statics.enabled) {
     const StaticSettings& st = scene->statics.settings;
     std::string holds;
@@ -410,8 +408,7 @@ ReportInfo report_info(const Scene& scene) {
                                        "{} potential terms",
                                        sys.n_nodes(), sys.n_dofs(), sys.prescribed().size(),
                                        sys.n_constraints(), sys.potentials().size()));
-  for (const auto& b : scene.bodies)
-    s.emplace_back("body " + b.name, b.mesh + "; " + b.material);
+  for (const auto& b : scene.bodies) s.emplace_back("body " + b.name, b.mesh + "; " + b.material);
   for (const auto& l : scene.loads)
     s.emplace_back("load " + l.name, l.magnitude + " x " + l.time_function);
   s.emplace_back("history", fmt::format("a row every {} step(s)", scene.output.every));
@@ -471,8 +468,7 @@ class FieldOutput {
   std::unique_ptr<FieldWriter> writer_;
 };
 
-int run_scene(const RunOptions& options, std::ostream& out, std::ostream& err,
-              RunRecord& record) {
+int run_scene(const RunOptions& options, std::ostream& out, std::ostream& err, RunRecord& record) {
   const auto bad_input = [&](const std::string& message) {
     fmt::print(err, "emdae: error: {}\n", message);
     record.message = message;
@@ -506,8 +502,8 @@ int run_scene(const RunOptions& options, std::ostream& out, std::ostream& err,
   try {
     stepper = build_stepper();
   } catch (const std::invalid_argument& e) {
-    return bad_input(fmt::format("scheme '{}' cannot run scene '{}': {}", scene->scheme,
-                                 scene->name, e.what()));
+    return bad_input(
+        fmt::format("scheme '{}' cannot run scene '{}': {}", scene->scheme, scene->name, e.what()));
   }
 
   const std::string dir =
@@ -622,8 +618,7 @@ int run_scene(const RunOptions& options, std::ostream& out, std::ostream& err,
       // The run is judged by history and summary; a report is their view.
       fmt::print(err, "emdae: warning: no report: {}\n", e.what());
     }
-    if (!options.quiet || exit_code != kExitOk)
-      print_summary(out, summary, dir, fields.active());
+    if (!options.quiet || exit_code != kExitOk) print_summary(out, summary, dir, fields.active());
     if (exit_code == kExitOk && !summary.checks_pass()) {
       exit_code = kExitChecksFailed;
       for (const auto& c : summary.checks)
@@ -822,17 +817,19 @@ int emdae_main(int argc, char** argv) {
   compare->add_option("scene", compare_options.scene_path, "Scene file (TOML)")
       ->required()
       ->type_name("FILE");
-  compare->add_option("--schemes", compare_options.schemes,
-                      "Comma-separated schemes to run (known: " + known + ")")
+  compare
+      ->add_option("--schemes", compare_options.schemes,
+                   "Comma-separated schemes to run (known: " + known + ")")
       ->required()
       ->type_name("A,B,...");
   compare->add_option("--dt", compare_options.dt, "Time step, overriding the scene's time.dt")
       ->type_name("X");
-  compare->add_option("--t-end", compare_options.t_end,
-                      "End time, overriding the scene's time.t_end")
+  compare
+      ->add_option("--t-end", compare_options.t_end, "End time, overriding the scene's time.t_end")
       ->type_name("T");
-  compare->add_option("--out", compare_options.out_dir,
-                      "Output folder (default: out/<scene name>-compare)")
+  compare
+      ->add_option("--out", compare_options.out_dir,
+                   "Output folder (default: out/<scene name>-compare)")
       ->type_name("DIR");
   compare->add_option("--set", compare_options.overrides, "Override a scene value (as for run)")
       ->allow_extra_args(false)

@@ -1,7 +1,5 @@
 #include "cli/scene.hpp"
 
-#include "core/gmsh_reader.hpp"
-
 #include <fmt/format.h>
 #include <toml++/toml.h>
 
@@ -18,6 +16,7 @@
 
 #include "contact/mortar_contact.hpp"
 #include "core/fe_element.hpp"
+#include "core/gmsh_reader.hpp"
 #include "core/mesh.hpp"
 #include "core/particles.hpp"
 #include "integrators/stepper.hpp"
@@ -739,8 +738,8 @@ Mesh Builder::mesh(const Fields& f, std::string* text) const {
     const std::string path = (base / file).string();
     try {
       Mesh mesh = read_gmsh(path, surface);
-      *text = fmt::format("gmsh {}{}, {} elements", file, surface.empty() ? "" : " (" + surface + ")",
-                          mesh.n_elements());
+      *text = fmt::format("gmsh {}{}, {} elements", file,
+                          surface.empty() ? "" : " (" + surface + ")", mesh.n_elements());
       return mesh;
     } catch (const std::exception& e) {
       m.fail_key("file", std::string(e.what()) + ", received \"" + file + "\"");
@@ -1161,8 +1160,8 @@ void Builder::parse_output(const Fields& f) {
   scene_.output.every = static_cast<int>(std::min<long>(every, 1L << 30));
   const long vtu_every = f.integer("vtu_every", -1);
   if (f.has("vtu_every") && vtu_every < 0)
-    f.fail_key("vtu_every", "must be 0 (no fields) or at least 1, received " +
-                                std::to_string(vtu_every));
+    f.fail_key("vtu_every",
+               "must be 0 (no fields) or at least 1, received " + std::to_string(vtu_every));
   scene_.output.vtu_every = vtu_every;
 }
 

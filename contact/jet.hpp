@@ -66,9 +66,13 @@ Jet<N> operator/(const Jet<N>& a, const Jet<N>& b) {
   return a * inv;
 }
 template <int N>
-Jet<N> operator+(const Jet<N>& a, double b) { return a + Jet<N>(b); }
+Jet<N> operator+(const Jet<N>& a, double b) {
+  return a + Jet<N>(b);
+}
 template <int N>
-Jet<N> operator-(double a, const Jet<N>& b) { return Jet<N>(a) - b; }
+Jet<N> operator-(double a, const Jet<N>& b) {
+  return Jet<N>(a) - b;
+}
 template <int N>
 Jet<N> operator*(double a, const Jet<N>& b) {
   Jet<N> r = b;
@@ -78,14 +82,22 @@ Jet<N> operator*(double a, const Jet<N>& b) {
   return r;
 }
 
-inline double value_of(double x) { return x; }
+inline double value_of(double x) {
+  return x;
+}
 template <int N>
-double value_of(const Jet<N>& x) { return x.v; }
+double value_of(const Jet<N>& x) {
+  return x.v;
+}
 
 /// max and min that follow the values (the branch taken is differentiated).
 template <class T>
-T max_of(const T& a, const T& b) { return value_of(a) >= value_of(b) ? a : b; }
+T max_of(const T& a, const T& b) {
+  return value_of(a) >= value_of(b) ? a : b;
+}
 template <class T>
-T min_of(const T& a, const T& b) { return value_of(a) <= value_of(b) ? a : b; }
+T min_of(const T& a, const T& b) {
+  return value_of(a) <= value_of(b) ? a : b;
+}
 
 }  // namespace emdae

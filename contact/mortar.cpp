@@ -49,7 +49,7 @@ struct PairForms {
     pa.block<2, 2>(0, 0) = -i2, pa.block<2, 2>(0, 2) = i2;  // a  = x2s - x1s
     p1.block<2, 2>(0, 0) = -i2, p1.block<2, 2>(0, 4) = i2;  // e1 = x1m - x1s
     p2.block<2, 2>(0, 0) = -i2, p2.block<2, 2>(0, 6) = i2;  // e2 = x2m - x1s
-    Eigen::Matrix2d cross;  // u x v = u^T J v
+    Eigen::Matrix2d cross;                                  // u x v = u^T J v
     cross << 0, 1, -1, 0;
     auto sym = [](const P& b, const Eigen::Matrix2d& m, const P& c) -> Eigen::Matrix<double, 8, 8> {
       // pi = (b x)^T m (c x)  =>  A = b^T m c + c^T m^T b
@@ -78,8 +78,10 @@ std::vector<int> node_dofs(const std::vector<int>& nodes) {
 
 MortarGapTerm::MortarGapTerm(const std::vector<int>& nodes, std::vector<MortarPair> pairs,
                              double weight, std::string name)
-    : Term(node_dofs(nodes), 5 * static_cast<int>(pairs.size()), 5), pairs_(std::move(pairs)),
-      weight_(weight), name_(std::move(name)) {
+    : Term(node_dofs(nodes), 5 * static_cast<int>(pairs.size()), 5),
+      pairs_(std::move(pairs)),
+      weight_(weight),
+      name_(std::move(name)) {
   if (!(weight_ > 0)) throw std::invalid_argument(name_ + ": mortar weight must be positive");
 }
 
@@ -87,9 +89,12 @@ void MortarGapTerm::invariants(const Vec& q, Vec& pi) const {
   pi.resize(n_invariants());
   Eigen::Matrix<double, 8, 1> x;
   for (std::size_t b = 0; b < pairs_.size(); ++b) {
-    for (int k = 0; k < 4; ++k) x.segment<2>(2 * k) = q.segment<2>(dof(pairs_[b].local_nodes[static_cast<std::size_t>(k)], 0));
+    for (int k = 0; k < 4; ++k)
+      x.segment<2>(2 * k) =
+          q.segment<2>(dof(pairs_[b].local_nodes[static_cast<std::size_t>(k)], 0));
     for (int k = 0; k < 5; ++k)
-      pi[static_cast<Eigen::Index>(5 * b) + k] = 0.5 * x.dot(forms().a[static_cast<std::size_t>(k)] * x);
+      pi[static_cast<Eigen::Index>(5 * b) + k] =
+          0.5 * x.dot(forms().a[static_cast<std::size_t>(k)] * x);
   }
 }
 
@@ -98,12 +103,14 @@ void MortarGapTerm::invariant_jacobian(const Vec& q, Mat& dpi) const {
   Eigen::Matrix<double, 8, 1> x;
   for (std::size_t b = 0; b < pairs_.size(); ++b) {
     const auto& ln = pairs_[b].local_nodes;
-    for (int k = 0; k < 4; ++k) x.segment<2>(2 * k) = q.segment<2>(dof(ln[static_cast<std::size_t>(k)], 0));
+    for (int k = 0; k < 4; ++k)
+      x.segment<2>(2 * k) = q.segment<2>(dof(ln[static_cast<std::size_t>(k)], 0));
     for (int k = 0; k < 5; ++k) {
       const Eigen::Matrix<double, 8, 1> row = forms().a[static_cast<std::size_t>(k)] * x;
       for (int j = 0; j < 4; ++j)
         for (int c = 0; c < 2; ++c)
-          dpi(static_cast<Eigen::Index>(5 * b) + k, dof(ln[static_cast<std::size_t>(j)], c)) += row[2 * j + c];
+          dpi(static_cast<Eigen::Index>(5 * b) + k, dof(ln[static_cast<std::size_t>(j)], c)) +=
+              row[2 * j + c];
     }
   }
 }
@@ -111,14 +118,15 @@ void MortarGapTerm::invariant_jacobian(const Vec& q, Mat& dpi) const {
 void MortarGapTerm::add_invariant_hessians(const Vec& w, Mat& kmat) const {
   for (std::size_t b = 0; b < pairs_.size(); ++b) {
     Eigen::Matrix<double, 8, 8> sum = Eigen::Matrix<double, 8, 8>::Zero();
-    for (int k = 0; k < 5; ++k) sum += w[static_cast<Eigen::Index>(5 * b) + k] * forms().a[static_cast<std::size_t>(k)];
+    for (int k = 0; k < 5; ++k)
+      sum += w[static_cast<Eigen::Index>(5 * b) + k] * forms().a[static_cast<std::size_t>(k)];
     const auto& ln = pairs_[b].local_nodes;
     for (int i = 0; i < 4; ++i)
       for (int j = 0; j < 4; ++j)
         for (int ci = 0; ci < 2; ++ci)
           for (int cj = 0; cj < 2; ++cj)
-            kmat(dof(ln[static_cast<std::size_t>(i)], ci), dof(ln[static_cast<std::size_t>(j)], cj)) +=
-                sum(2 * i + ci, 2 * j + cj);
+            kmat(dof(ln[static_cast<std::size_t>(i)], ci),
+                 dof(ln[static_cast<std::size_t>(j)], cj)) += sum(2 * i + ci, 2 * j + cj);
   }
 }
 
@@ -146,7 +154,8 @@ double MortarGapTerm::coverage(const Vec& q) const {
   invariants(q, pi);
   double c = 0.0;
   for (std::size_t b = 0; b < pairs_.size(); ++b) {
-    const double p1 = pi[static_cast<Eigen::Index>(5 * b)], p2 = pi[static_cast<Eigen::Index>(5 * b) + 1],
+    const double p1 = pi[static_cast<Eigen::Index>(5 * b)],
+                 p2 = pi[static_cast<Eigen::Index>(5 * b) + 1],
                  p3 = pi[static_cast<Eigen::Index>(5 * b) + 2];
     if (!(p3 < p2) || !(p1 > 0)) continue;
     c += std::max(0.0, std::min(p1, p2) - std::max(0.0, p3)) / p1;

@@ -1,23 +1,28 @@
 #include "contact/mortar_contact.hpp"
 
-#include "core/gradient.hpp"
-
 #include <algorithm>
 #include <limits>
 #include <map>
 #include <stdexcept>
 
+#include "core/gradient.hpp"
+
 namespace emdae {
 
 namespace {
 
-Eigen::Vector2d node_position(const Vec& q, int node) { return q.segment<2>(2 * node); }
+Eigen::Vector2d node_position(const Vec& q, int node) {
+  return q.segment<2>(2 * node);
+}
 
 }  // namespace
 
 MortarContact::MortarContact(const System& system, ContactSurface slave, ContactSurface master,
                              std::string name, ContactOptions options)
-    : name_(std::move(name)), slave_(std::move(slave)), master_(std::move(master)), options_(options) {
+    : name_(std::move(name)),
+      slave_(std::move(slave)),
+      master_(std::move(master)),
+      options_(options) {
   if (system.dim() != 2) throw std::invalid_argument(name_ + ": mortar contact is planar (2D)");
   if (slave_.edges.empty() || master_.edges.empty())
     throw std::invalid_argument(name_ + ": slave and master surfaces need at least one segment");
@@ -27,21 +32,25 @@ MortarContact::MortarContact(const System& system, ContactSurface slave, Contact
     for (int k = 0; k < 2; ++k) {
       const int node = slave_.edges[e][static_cast<std::size_t>(k)];
       if (node < 0 || node >= system.n_nodes())
-        throw std::invalid_argument(name_ + ": slave surface refers to missing node " + std::to_string(node));
+        throw std::invalid_argument(name_ + ": slave surface refers to missing node " +
+                                    std::to_string(node));
       auto [it, inserted] = index.emplace(node, static_cast<int>(slave_nodes_.size()));
       if (inserted) {
         slave_nodes_.push_back(node);
         node_edges_.push_back({-1, -1});
         weights_.push_back(0.0);
       }
-      node_edges_[static_cast<std::size_t>(it->second)][static_cast<std::size_t>(k)] = static_cast<int>(e);
-      const double len = (node_position(x0, slave_.edges[e][1]) - node_position(x0, slave_.edges[e][0])).norm();
+      node_edges_[static_cast<std::size_t>(it->second)][static_cast<std::size_t>(k)] =
+          static_cast<int>(e);
+      const double len =
+          (node_position(x0, slave_.edges[e][1]) - node_position(x0, slave_.edges[e][0])).norm();
       weights_[static_cast<std::size_t>(it->second)] += 0.5 * len;
     }
   for (const auto& e : master_.edges) {
     for (int node : e)
       if (node < 0 || node >= system.n_nodes())
-        throw std::invalid_argument(name_ + ": master surface refers to missing node " + std::to_string(node));
+        throw std::invalid_argument(name_ + ": master surface refers to missing node " +
+                                    std::to_string(node));
     mean_master_length_ += (node_position(x0, e[1]) - node_position(x0, e[0])).norm();
   }
   mean_master_length_ /= static_cast<double>(master_.edges.size());
@@ -84,12 +93,14 @@ void MortarContact::prepare(const Vec& q, const Vec& v, double dt) {
   std::vector<std::vector<int>> candidates(slave_.edges.size());
   for (std::size_t e = 0; e < slave_.edges.size(); ++e) {
     grid_.query(box(slave_.edges[e]), candidates[e]);
-    const Eigen::Vector2d as = node_position(q, slave_.edges[e][1]) - node_position(q, slave_.edges[e][0]);
+    const Eigen::Vector2d as =
+        node_position(q, slave_.edges[e][1]) - node_position(q, slave_.edges[e][0]);
     auto& c = candidates[e];
     c.erase(std::remove_if(c.begin(), c.end(),
                            [&](int m) {
                              const auto& me = master_.edges[static_cast<std::size_t>(m)];
-                             const Eigen::Vector2d am = node_position(q, me[1]) - node_position(q, me[0]);
+                             const Eigen::Vector2d am =
+                                 node_position(q, me[1]) - node_position(q, me[0]);
                              return as.dot(am) >= 0.0;
                            }),
             c.end());
@@ -115,9 +126,10 @@ void MortarContact::prepare(const Vec& q, const Vec& v, double dt) {
       }
     }
     n_pairs_ += static_cast<long>(pairs.size());
-    terms_[i] = pairs.empty() ? nullptr
-                              : std::make_unique<MortarGapTerm>(nodes, std::move(pairs), weights_[i],
-                                                                describe(static_cast<int>(i)));
+    terms_[i] = pairs.empty()
+                    ? nullptr
+                    : std::make_unique<MortarGapTerm>(nodes, std::move(pairs), weights_[i],
+                                                      describe(static_cast<int>(i)));
   }
 }
 

@@ -6,7 +6,9 @@
 
 namespace emdae {
 
-long BucketGrid::cell_of(double x) const { return static_cast<long>(std::floor(x / cell_)); }
+long BucketGrid::cell_of(double x) const {
+  return static_cast<long>(std::floor(x / cell_));
+}
 
 void BucketGrid::build(const std::vector<Box>& boxes, double cell) {
   if (!(cell > 0)) throw std::invalid_argument("BucketGrid: cell size must be positive");

@@ -7,8 +7,8 @@ Assembler::Assembler(const System& system, const std::vector<const Term*>& extra
   constraints_.insert(constraints_.end(), extra.begin(), extra.end());
 }
 
-void Assembler::local(const Term& term, GradientKind kind, const Vec& q0, const Vec& q1,
-                      double t0, double t1, Mat* jac) {
+void Assembler::local(const Term& term, GradientKind kind, const Vec& q0, const Vec& q1, double t0,
+                      double t1, Mat* jac) {
   gather(term, q0, ql0_);
   gather(term, q1, ql1_);
   term_gradient(term, kind, ql0_, ql1_, t0, t1, grad_, jac, ws_);
@@ -35,9 +35,8 @@ void Assembler::add_potential_forces(GradientKind kind, const Vec& q0, const Vec
 }
 
 void Assembler::add_constraint_forces(GradientKind kind, const Vec& q0, const Vec& q1, double t0,
-                                      double t1, const Vec& lambda, Vec& f, Vec* phi,
-                                      Triplets* jac, long lambda_col, long phi_row,
-                                      double jac_factor) {
+                                      double t1, const Vec& lambda, Vec& f, Vec* phi, Triplets* jac,
+                                      long lambda_col, long phi_row, double jac_factor) {
   const auto& fixed = s_.is_prescribed();
   if (phi) phi->resize(n_constraints());
   for (int l = 0; l < n_constraints(); ++l) {
@@ -75,7 +74,8 @@ void Assembler::add_constraint_jacobian(const Vec& q, double t, Triplets& out, l
     local(c, GradientKind::Exact, q, q, t, t, nullptr);
     const auto& dofs = c.dofs();
     for (std::size_t i = 0; i < dofs.size(); ++i)
-      out.emplace_back(row_offset + l, col_offset + dofs[i], factor * grad_[static_cast<Eigen::Index>(i)]);
+      out.emplace_back(row_offset + l, col_offset + dofs[i],
+                       factor * grad_[static_cast<Eigen::Index>(i)]);
   }
 }
 

@@ -53,7 +53,7 @@ struct Line2 {
 
 Mesh read_gmsh(const std::string& path, const std::string& surface) {
   Reader r(path);
-  std::map<std::pair<int, int>, std::string> physical_names;  // (dim, tag) -> name
+  std::map<std::pair<int, int>, std::string> physical_names;         // (dim, tag) -> name
   std::map<std::pair<int, int>, std::vector<int>> entity_physicals;  // (dim, entity) -> tags
   std::map<long, Eigen::Vector2d> nodes;
   std::vector<std::array<long, 4>> quads;
@@ -66,7 +66,8 @@ Mesh read_gmsh(const std::string& path, const std::string& surface) {
       auto f = r.next_fields("the format line");
       const std::string version = r.get<std::string>(f, "a version");
       const int file_type = r.get<int>(f, "a file type");
-      if (version != "4.1") r.fail("MSH version " + version + " is not supported (write MSH 4.1: gmsh -format msh41)");
+      if (version != "4.1")
+        r.fail("MSH version " + version + " is not supported (write MSH 4.1: gmsh -format msh41)");
       if (file_type != 0) r.fail("binary MSH files are not supported (write ASCII)");
       format_seen = true;
     } else if (line == "$PhysicalNames") {
@@ -93,7 +94,8 @@ Mesh read_gmsh(const std::string& path, const std::string& surface) {
           const int n_coords = dim == 0 ? 3 : 6;
           for (int k = 0; k < n_coords; ++k) r.get<double>(e, "a coordinate");
           const int n_phys = r.get<int>(e, "a number of physical tags");
-          for (int k = 0; k < n_phys; ++k) entity_physicals[{dim, tag}].push_back(std::abs(r.get<int>(e, "a physical tag")));
+          for (int k = 0; k < n_phys; ++k)
+            entity_physicals[{dim, tag}].push_back(std::abs(r.get<int>(e, "a physical tag")));
         }
     } else if (line == "$Nodes") {
       auto f = r.next_fields("node counts");
@@ -111,8 +113,11 @@ Mesh read_gmsh(const std::string& path, const std::string& surface) {
         }
         for (long t : tags) {
           auto l = r.next_fields("node coordinates");
-          const double x = r.get<double>(l, "x"), y = r.get<double>(l, "y"), z = r.get<double>(l, "z");
-          if (z != 0.0) r.fail("node " + std::to_string(t) + " has z = " + std::to_string(z) + ": planar meshes only");
+          const double x = r.get<double>(l, "x"), y = r.get<double>(l, "y"),
+                       z = r.get<double>(l, "z");
+          if (z != 0.0)
+            r.fail("node " + std::to_string(t) + " has z = " + std::to_string(z) +
+                   ": planar meshes only");
           nodes[t] = Eigen::Vector2d(x, y);
         }
       }
@@ -126,16 +131,19 @@ Mesh read_gmsh(const std::string& path, const std::string& surface) {
         const int type = r.get<int>(h, "an element type");
         const long n = r.get<long>(h, "an element count");
         const auto phys_it = entity_physicals.find({dim, entity});
-        const std::vector<int> phys = phys_it == entity_physicals.end() ? std::vector<int>{} : phys_it->second;
+        const std::vector<int> phys =
+            phys_it == entity_physicals.end() ? std::vector<int>{} : phys_it->second;
         bool wanted_surface = dim == 2 && surface.empty();
         for (int p : phys)
-          if (dim == 2 && physical_names.count({2, p}) && physical_names[{2, p}] == surface) wanted_surface = true;
+          if (dim == 2 && physical_names.count({2, p}) && physical_names[{2, p}] == surface)
+            wanted_surface = true;
         for (long i = 0; i < n; ++i) {
           auto l = r.next_fields("an element");
           r.get<long>(l, "an element tag");
           if (dim == 2 && wanted_surface) {
             if (type != 3)
-              r.fail("surface element of type " + std::to_string(type) + ": only 4-node quadrilaterals (type 3) are supported; recombine the mesh");
+              r.fail("surface element of type " + std::to_string(type) +
+                     ": only 4-node quadrilaterals (type 3) are supported; recombine the mesh");
             std::array<long, 4> q{};
             for (auto& v : q) v = r.get<long>(l, "a node tag");
             quads.push_back(q);
@@ -150,13 +158,16 @@ Mesh read_gmsh(const std::string& path, const std::string& surface) {
   }
   if (!format_seen) throw MeshFileError(path + ": not a Gmsh mesh (no $MeshFormat section)");
   if (quads.empty())
-    throw MeshFileError(path + ": no quadrilaterals" + (surface.empty() ? std::string() : " in physical surface '" + surface + "'"));
+    throw MeshFileError(
+        path + ": no quadrilaterals" +
+        (surface.empty() ? std::string() : " in physical surface '" + surface + "'"));
 
   // Renumber the nodes used by the quads, in tag order.
   std::map<long, int> index;
   for (const auto& q : quads)
     for (long t : q) {
-      if (!nodes.count(t)) throw MeshFileError(path + ": element refers to missing node " + std::to_string(t));
+      if (!nodes.count(t))
+        throw MeshFileError(path + ": element refers to missing node " + std::to_string(t));
       index.emplace(t, 0);
     }
   Mesh mesh;
@@ -167,27 +178,35 @@ Mesh read_gmsh(const std::string& path, const std::string& surface) {
   std::map<std::pair<int, int>, int> directed;  // quad edge (a, b) as traversed counter-clockwise
   for (const auto& q : quads) {
     std::array<int, 4> v{};
-    for (int k = 0; k < 4; ++k) v[static_cast<std::size_t>(k)] = index[q[static_cast<std::size_t>(k)]];
+    for (int k = 0; k < 4; ++k)
+      v[static_cast<std::size_t>(k)] = index[q[static_cast<std::size_t>(k)]];
     double area2 = 0.0;
     for (int k = 0; k < 4; ++k) {
       const auto& p = mesh.nodes[static_cast<std::size_t>(v[static_cast<std::size_t>(k)])];
-      const auto& n = mesh.nodes[static_cast<std::size_t>(v[static_cast<std::size_t>((k + 1) % 4)])];
+      const auto& n =
+          mesh.nodes[static_cast<std::size_t>(v[static_cast<std::size_t>((k + 1) % 4)])];
       area2 += p.x() * n.y() - n.x() * p.y();
     }
     if (area2 < 0) std::swap(v[1], v[3]);
     mesh.quads.push_back(v);
-    for (int k = 0; k < 4; ++k) directed[{v[static_cast<std::size_t>(k)], v[static_cast<std::size_t>((k + 1) % 4)]}] = 1;
+    for (int k = 0; k < 4; ++k)
+      directed[{v[static_cast<std::size_t>(k)], v[static_cast<std::size_t>((k + 1) % 4)]}] = 1;
   }
   for (const auto& [e, phys] : lines) {
     if (!index.count(e[0]) || !index.count(e[1])) continue;  // a curve of another surface
     const int a = index[e[0]], b = index[e[1]];
     std::array<int, 2> edge{};
-    if (directed.count({a, b})) edge = {a, b};
-    else if (directed.count({b, a})) edge = {b, a};
-    else throw MeshFileError(path + ": line (" + std::to_string(e[0]) + ", " + std::to_string(e[1]) + ") of a physical curve is not a side of any quadrilateral");
+    if (directed.count({a, b}))
+      edge = {a, b};
+    else if (directed.count({b, a}))
+      edge = {b, a};
+    else
+      throw MeshFileError(path + ": line (" + std::to_string(e[0]) + ", " + std::to_string(e[1]) +
+                          ") of a physical curve is not a side of any quadrilateral");
     for (int p : phys) {
       const auto it = physical_names.find({1, p});
-      const std::string name = it == physical_names.end() ? "curve" + std::to_string(p) : it->second;
+      const std::string name =
+          it == physical_names.end() ? "curve" + std::to_string(p) : it->second;
       mesh.edge_sets[name].push_back(edge);
       auto& ns = mesh.node_sets[name];
       for (int n : edge)

@@ -8,7 +8,8 @@ namespace emdae {
 void gather(const Term& term, const Vec& global, Vec& local) {
   const auto& dofs = term.dofs();
   local.resize(static_cast<Eigen::Index>(dofs.size()));
-  for (std::size_t i = 0; i < dofs.size(); ++i) local[static_cast<Eigen::Index>(i)] = global[dofs[i]];
+  for (std::size_t i = 0; i < dofs.size(); ++i)
+    local[static_cast<Eigen::Index>(i)] = global[dofs[i]];
 }
 
 namespace {
@@ -64,8 +65,7 @@ void discrete_gradient(const Term& term, const Vec& q0, const Vec& q1, double t0
     if (jac) ws.block_jac.block(b * m, b * m, m, m) = 0.5 * hm;
     if (quadratic) continue;
     const double d2 = dpi.squaredNorm();
-    const double scale =
-        std::max(ws.pi0.segment(b * m, m).norm(), ws.pi1.segment(b * m, m).norm());
+    const double scale = std::max(ws.pi0.segment(b * m, m).norm(), ws.pi1.segment(b * m, m).norm());
     if (d2 <= std::pow(kDiscreteGradientThreshold * scale, 2) || d2 == 0.0) continue;
     double c = 0.0;
     if (d2 > std::pow(kDiscreteGradientQuadratureThreshold * scale, 2)) {

@@ -70,14 +70,19 @@ namespace {
 class DeadLoad final : public Load {
  public:
   DeadLoad(std::vector<int> dofs, Vec forces, TimeFunction g, std::string name)
-      : dofs_(std::move(dofs)), forces_(std::move(forces)), g_(std::move(g)), name_(std::move(name)) {
+      : dofs_(std::move(dofs)),
+        forces_(std::move(forces)),
+        g_(std::move(g)),
+        name_(std::move(name)) {
     if (static_cast<Eigen::Index>(dofs_.size()) != forces_.size())
       throw std::invalid_argument(name_ + ": as many forces as dofs needed");
   }
   std::string describe() const override { return name_; }
-  void add_force(const Vec&, double t, Vec& f, Triplets*, double, const std::vector<bool>&) const override {
+  void add_force(const Vec&, double t, Vec& f, Triplets*, double,
+                 const std::vector<bool>&) const override {
     const double g = g_(t);
-    for (std::size_t i = 0; i < dofs_.size(); ++i) f[dofs_[i]] += g * forces_[static_cast<Eigen::Index>(i)];
+    for (std::size_t i = 0; i < dofs_.size(); ++i)
+      f[dofs_[i]] += g * forces_[static_cast<Eigen::Index>(i)];
   }
   double moment(const Vec& q, double t) const override {
     // Pairs (x, y) of the same node are consecutive dofs 2k, 2k+1.
@@ -101,7 +106,8 @@ class Torque final : public Load {
  public:
   Torque(std::vector<int> nodes, TimeFunction torque, std::string name)
       : nodes_(std::move(nodes)), torque_(std::move(torque)), name_(std::move(name)) {
-    if (nodes_.size() < 2) throw std::invalid_argument(name_ + ": a torque needs at least two nodes");
+    if (nodes_.size() < 2)
+      throw std::invalid_argument(name_ + ": a torque needs at least two nodes");
   }
   std::string describe() const override { return name_; }
 
@@ -130,7 +136,8 @@ class Torque final : public Load {
         for (int i = 0; i < 2; ++i) {
           const int row = 2 * nodes_[a] + i;
           if (fixed[static_cast<std::size_t>(row)]) continue;
-          for (int j = 0; j < 2; ++j) jac->emplace_back(row, 2 * nodes_[cc] + j, jac_factor * block(i, j));
+          for (int j = 0; j < 2; ++j)
+            jac->emplace_back(row, 2 * nodes_[cc] + j, jac_factor * block(i, j));
         }
       }
   }
@@ -146,8 +153,9 @@ class Torque final : public Load {
 }  // namespace
 
 std::unique_ptr<Load> make_nodal_load(std::vector<int> dofs, Vec forces, TimeFunction g,
-                                     std::string name) {
-  return std::make_unique<DeadLoad>(std::move(dofs), std::move(forces), std::move(g), std::move(name));
+                                      std::string name) {
+  return std::make_unique<DeadLoad>(std::move(dofs), std::move(forces), std::move(g),
+                                    std::move(name));
 }
 
 std::unique_ptr<Load> make_torque(std::vector<int> nodes, TimeFunction torque, std::string name) {

@@ -57,7 +57,7 @@ class Load {
 /// Nodal forces fixed in direction and distribution, scaled by g(t):
 /// f = g(t) F (body force, boundary traction, gravity on a body).
 std::unique_ptr<Load> make_nodal_load(std::vector<int> dofs, Vec forces, TimeFunction g,
-                                     std::string name);
+                                      std::string name);
 
 /// A pure torque T(t) on the nodes of a set (2D): node A gets
 /// f_A = T(t) e3 x r_A / sum_B |r_B|^2 with r_A = x_A - mean(x), so the

@@ -53,8 +53,8 @@ class Spring final : public QuadraticFormTerm {
   }
   bool quadratic_in_invariants() const override { return law_ == SpringLaw::Green; }
   std::string describe() const override {
-    return std::string(law_ == SpringLaw::Green ? "green" : "linear") + " spring (k = " +
-           std::to_string(k_) + ", L = " + std::to_string(l0_) + ")";
+    return std::string(law_ == SpringLaw::Green ? "green" : "linear") +
+           " spring (k = " + std::to_string(k_) + ", L = " + std::to_string(l0_) + ")";
   }
 
  private:
@@ -80,8 +80,8 @@ class Link final : public QuadraticFormTerm {
   bool quadratic_in_invariants() const override { return true; }
   Symmetry symmetry() const override { return anchored_ ? Symmetry{false, false} : Symmetry{}; }
   std::string describe() const override {
-    return std::string(anchored_ ? "anchor link" : "rigid link") + " (L = " + std::to_string(length_) +
-           ")";
+    return std::string(anchored_ ? "anchor link" : "rigid link") +
+           " (L = " + std::to_string(length_) + ")";
   }
 
  private:
@@ -93,7 +93,8 @@ class Link final : public QuadraticFormTerm {
 class DeadLoad final : public QuadraticFormTerm {
  public:
   DeadLoad(std::vector<int> dofs, Vec force)
-      : QuadraticFormTerm(std::move(dofs), static_cast<int>(force.size())), force_(std::move(force)) {
+      : QuadraticFormTerm(std::move(dofs), static_cast<int>(force.size())),
+        force_(std::move(force)) {
     const int n = static_cast<int>(force_.size());
     for (int k = 0; k < n; ++k) add_invariant(Mat::Zero(n, n), Vec::Unit(n, k), 0.0);
   }
@@ -109,7 +110,9 @@ class DeadLoad final : public QuadraticFormTerm {
 };
 
 void check_positive(double x, const char* what) {
-  if (!(x > 0.0)) throw std::invalid_argument(std::string(what) + " must be positive, received " + std::to_string(x));
+  if (!(x > 0.0))
+    throw std::invalid_argument(std::string(what) + " must be positive, received " +
+                                std::to_string(x));
 }
 
 }  // namespace
@@ -118,7 +121,8 @@ std::unique_ptr<Term> make_spring(const System& system, int a, int b, double sti
                                   double rest_length, SpringLaw law) {
   check_positive(stiffness, "spring stiffness");
   check_positive(rest_length, "spring rest length");
-  return std::make_unique<Spring>(node_dofs(system, {a, b}), system.dim(), stiffness, rest_length, law);
+  return std::make_unique<Spring>(node_dofs(system, {a, b}), system.dim(), stiffness, rest_length,
+                                  law);
 }
 
 std::unique_ptr<Term> make_link(const System& system, int a, int b, double length) {

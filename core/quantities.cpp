@@ -42,7 +42,8 @@ Quantities measure(const System& system, const Vec& q, const Vec& v, double t) {
     if (dim == 2) {
       out.angular_momentum[0] += qa[0] * pa[1] - qa[1] * pa[0];
     } else {
-      out.angular_momentum += Eigen::Vector3d(qa[0], qa[1], qa[2]).cross(Eigen::Vector3d(pa[0], pa[1], pa[2]));
+      out.angular_momentum +=
+          Eigen::Vector3d(qa[0], qa[1], qa[2]).cross(Eigen::Vector3d(pa[0], pa[1], pa[2]));
     }
   }
   out.phi_max = constraint_residual(system, q, t);

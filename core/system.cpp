@@ -7,7 +7,8 @@ namespace emdae {
 
 System::System(int dim) : dim_(dim) {
   if (dim != 2 && dim != 3)
-    throw std::invalid_argument("System: dimension must be 2 or 3, received " + std::to_string(dim));
+    throw std::invalid_argument("System: dimension must be 2 or 3, received " +
+                                std::to_string(dim));
 }
 
 int System::add_node(const Vec& position, const Vec& velocity) {
@@ -34,14 +35,19 @@ void System::add_mass(int a, int b, double m) {
   assembled_ = false;
 }
 
-void System::add_potential(std::unique_ptr<Term> term) { potentials_.push_back(std::move(term)); }
-void System::add_constraint(std::unique_ptr<Term> term) { constraints_.push_back(std::move(term)); }
+void System::add_potential(std::unique_ptr<Term> term) {
+  potentials_.push_back(std::move(term));
+}
+void System::add_constraint(std::unique_ptr<Term> term) {
+  constraints_.push_back(std::move(term));
+}
 
 void System::add_unilateral(std::unique_ptr<UnilateralConstraints> set) {
   unilateral_.push_back(std::move(set));
 }
 
-void System::add_load_forces(const Vec& q, double t, Vec& f, Triplets* jac, double jac_factor) const {
+void System::add_load_forces(const Vec& q, double t, Vec& f, Triplets* jac,
+                             double jac_factor) const {
   for (const auto& load : loads_) load->add_force(q, t, f, jac, jac_factor, is_prescribed_);
 }
 
@@ -93,7 +99,8 @@ const SparseMatrix& System::mass() const {
     std::vector<Eigen::Triplet<double, long>> t;
     t.reserve(node_mass_.size() * static_cast<std::size_t>(dim_));
     for (const auto& e : node_mass_)
-      for (int d = 0; d < dim_; ++d) t.emplace_back(e.row() * dim_ + d, e.col() * dim_ + d, e.value());
+      for (int d = 0; d < dim_; ++d)
+        t.emplace_back(e.row() * dim_ + d, e.col() * dim_ + d, e.value());
     mass_.resize(n_dofs(), n_dofs());
     mass_.setFromTriplets(t.begin(), t.end());
     lumped_ = mass_ * Vec::Ones(n_dofs());
@@ -124,7 +131,8 @@ void System::validate() const {
   for (int i = 0; i < n_dofs(); ++i)
     if (!(m[i] > 0.0))
       throw std::invalid_argument("node " + std::to_string(i / dim_) +
-                                  " has no positive mass (lumped mass " + std::to_string(m[i]) + ")");
+                                  " has no positive mass (lumped mass " + std::to_string(m[i]) +
+                                  ")");
   for (const auto* list : {&potentials_, &constraints_})
     for (const auto& term : *list)
       for (int d : term->dofs())

@@ -63,7 +63,9 @@ class System {
   /// Adds a set of unilateral constraints (contact); its candidates are
   /// numbered after those of the sets added before it.
   void add_unilateral(std::unique_ptr<UnilateralConstraints> set);
-  const std::vector<std::unique_ptr<UnilateralConstraints>>& unilateral() const { return unilateral_; }
+  const std::vector<std::unique_ptr<UnilateralConstraints>>& unilateral() const {
+    return unilateral_;
+  }
   /// Total number of unilateral candidates over all sets.
   int n_unilateral() const;
   /// Candidate `id` (global numbering) as (set, index in set).

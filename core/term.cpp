@@ -13,7 +13,8 @@ double Term::value(const Vec& q, double t) const {
   Vec pi;
   invariants(q, pi);
   double f = 0.0;
-  for (int b = 0; b < n_blocks(); ++b) f += block_value(b, pi.segment(b * block_size_, block_size_), t);
+  for (int b = 0; b < n_blocks(); ++b)
+    f += block_value(b, pi.segment(b * block_size_, block_size_), t);
   return f;
 }
 

@@ -14,7 +14,9 @@ void require(const FunctionOfQ& f, const std::string& name) {
 class FunctionTerm final : public CoordinateTerm {
  public:
   FunctionTerm(std::vector<int> dofs, FunctionOfQ f, std::string name, bool time_dependent)
-      : CoordinateTerm(std::move(dofs)), f_(std::move(f)), name_(std::move(name)),
+      : CoordinateTerm(std::move(dofs)),
+        f_(std::move(f)),
+        name_(std::move(name)),
         time_dependent_(time_dependent) {
     require(f_, name_);
   }
@@ -38,8 +40,11 @@ class InvariantFunctionTerm final : public QuadraticFormTerm {
  public:
   InvariantFunctionTerm(std::vector<int> dofs, std::vector<QuadraticInvariant> inv, FunctionOfPi f,
                         std::string name, Symmetry symmetry, bool time_dependent)
-      : QuadraticFormTerm(std::move(dofs), static_cast<int>(inv.size())), f_(std::move(f)),
-        name_(std::move(name)), symmetry_(symmetry), time_dependent_(time_dependent) {
+      : QuadraticFormTerm(std::move(dofs), static_cast<int>(inv.size())),
+        f_(std::move(f)),
+        name_(std::move(name)),
+        symmetry_(symmetry),
+        time_dependent_(time_dependent) {
     if (!f_.value || !f_.gradient || !f_.hessian)
       throw std::invalid_argument("user term '" + name_ + "' needs value, gradient and hessian");
     for (auto& i : inv) add_invariant(std::move(i.a), std::move(i.b), i.c);
@@ -66,15 +71,18 @@ class InvariantFunctionTerm final : public QuadraticFormTerm {
 
 std::unique_ptr<Term> make_function_term(std::vector<int> dofs, FunctionOfQ f, std::string name,
                                          bool time_dependent) {
-  return std::make_unique<FunctionTerm>(std::move(dofs), std::move(f), std::move(name), time_dependent);
+  return std::make_unique<FunctionTerm>(std::move(dofs), std::move(f), std::move(name),
+                                        time_dependent);
 }
 
 std::unique_ptr<Term> make_invariant_term(std::vector<int> dofs,
-                                          std::vector<QuadraticInvariant> invariants, FunctionOfPi f,
-                                          std::string name, Symmetry symmetry, bool time_dependent) {
+                                          std::vector<QuadraticInvariant> invariants,
+                                          FunctionOfPi f, std::string name, Symmetry symmetry,
+                                          bool time_dependent) {
   if (invariants.empty()) throw std::invalid_argument("user term '" + name + "' has no invariants");
-  return std::make_unique<InvariantFunctionTerm>(std::move(dofs), std::move(invariants), std::move(f),
-                                                 std::move(name), symmetry, time_dependent);
+  return std::make_unique<InvariantFunctionTerm>(std::move(dofs), std::move(invariants),
+                                                 std::move(f), std::move(name), symmetry,
+                                                 time_dependent);
 }
 
 }  // namespace emdae

@@ -30,8 +30,8 @@ std::unique_ptr<Term> make_function_term(std::vector<int> dofs, FunctionOfQ f, s
                                          bool time_dependent = false);
 
 struct QuadraticInvariant {
-  Mat a;     // symmetric, n_local x n_local
-  Vec b;     // n_local
+  Mat a;  // symmetric, n_local x n_local
+  Vec b;  // n_local
   double c = 0.0;
 };
 
@@ -42,8 +42,8 @@ struct FunctionOfPi {
 };
 
 std::unique_ptr<Term> make_invariant_term(std::vector<int> dofs,
-                                          std::vector<QuadraticInvariant> invariants, FunctionOfPi f,
-                                          std::string name, Symmetry symmetry,
+                                          std::vector<QuadraticInvariant> invariants,
+                                          FunctionOfPi f, std::string name, Symmetry symmetry,
                                           bool time_dependent = false);
 
 }  // namespace emdae

@@ -56,13 +56,13 @@ Figures run(const System& s, const char* scheme, double dt, double t_end) {
   State st = initial_state(s);
   const double e0 = measure(s, st.q, st.v, 0.0).total();
   Figures f{e0, e0, 0.0, 0.0, true};
-  const RunOutcome out = integrate(*stepper, st, TimeSettings{dt, t_end, 0.0},
-                                   [&](const State& x, const AcceptedStep&) {
-                                     const Quantities q = measure(s, x.q, x.v, x.t);
-                                     f.energy_drift = std::max(f.energy_drift, std::abs(q.total() - e0));
-                                     f.phi_max = std::max(f.phi_max, q.phi_max);
-                                     f.e1 = q.total();
-                                   });
+  const RunOutcome out = integrate(
+      *stepper, st, TimeSettings{dt, t_end, 0.0}, [&](const State& x, const AcceptedStep&) {
+        const Quantities q = measure(s, x.q, x.v, x.t);
+        f.energy_drift = std::max(f.energy_drift, std::abs(q.total() - e0));
+        f.phi_max = std::max(f.phi_max, q.phi_max);
+        f.e1 = q.total();
+      });
   f.ok = out.ok;
   if (!out.ok) std::printf("  run failed: %s\n", out.message.c_str());
   return f;

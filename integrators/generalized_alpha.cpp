@@ -99,8 +99,15 @@ class GeneralizedAlphaStepper::Problem final : public NewtonProblem {
  public:
   Problem(const System& s, const GeneralizedAlphaSettings& p, const State& start, const Vec& a0,
           const Vec& qdd0, double h)
-      : s_(s), p_(p), assembler_(s), n_(s.n_dofs()), m_(s.n_constraints()),
-        m_nu_(p.stabilized ? m_ : 0), t1_(start.t + h), h_(h), q0_(start.q) {
+      : s_(s),
+        p_(p),
+        assembler_(s),
+        n_(s.n_dofs()),
+        m_(s.n_constraints()),
+        m_nu_(p.stabilized ? m_ : 0),
+        t1_(start.t + h),
+        h_(h),
+        q0_(start.q) {
     // Everything of step n that enters a_{n+1}, qdd_{n+1} and v_{n+1}, with
     // w = q_{n+1} - pred_ - G_f^T nu:
     //   a_{n+1} = w / (beta h^2),  qdd_{n+1} = c_ w + known_,
@@ -271,7 +278,8 @@ GeneralizedAlphaStepper::GeneralizedAlphaStepper(const System& system,
   if (system_.n_unilateral() > 0)
     throw std::invalid_argument(
         "GeneralizedAlphaStepper: contact (unilateral constraints) is not supported; the system "
-        "has " + std::to_string(system_.n_unilateral()) + " candidates");
+        "has " +
+        std::to_string(system_.n_unilateral()) + " candidates");
 }
 
 bool GeneralizedAlphaStepper::continues(const State& state) const {

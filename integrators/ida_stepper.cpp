@@ -84,11 +84,15 @@ using MatrixPtr = std::unique_ptr<std::remove_pointer_t<SUNMatrix>, MatrixFree>;
 using SolverPtr = std::unique_ptr<std::remove_pointer_t<SUNLinearSolver>, SolverFree>;
 using IdaPtr = std::unique_ptr<void, IdaFree>;
 
-Eigen::Map<Vec> view(N_Vector v) { return {N_VGetArrayPointer(v), N_VGetLength(v)}; }
+Eigen::Map<Vec> view(N_Vector v) {
+  return {N_VGetArrayPointer(v), N_VGetLength(v)};
+}
 
 // Central differences in t for the second derivative (start values only):
 // step 1e-4, truncation and round-off errors both ~1e-8.
-double time_step_second(double t) { return 1e-4 * std::max(1.0, std::abs(t)); }
+double time_step_second(double t) {
+  return 1e-4 * std::max(1.0, std::abs(t));
+}
 
 double phi_tt(const Term& c, const Vec& ql, double t) {
   const double h = time_step_second(t);
@@ -118,7 +122,9 @@ bool same(const Vec& a, const Vec& b) {
 // round-off ~1e-11 relative.
 
 namespace {
-double time_step_first(double t) { return 1e-5 * std::max(1.0, std::abs(t)); }
+double time_step_first(double t) {
+  return 1e-5 * std::max(1.0, std::abs(t));
+}
 }  // namespace
 
 double constraint_rate(const Term& c, const Vec& q_local, double t) {
@@ -206,8 +212,8 @@ ConsistentStart consistent_start(const System& s, double t, const Vec& q, const 
   // weight 1/atol makes the first corrector fail at every h.
   out.q = q;
   Vec rhs(n + m), phi;
-  const double round_off = 16 * std::numeric_limits<double>::epsilon() *
-                           std::max(1.0, q.lpNorm<Eigen::Infinity>());
+  const double round_off =
+      16 * std::numeric_limits<double>::epsilon() * std::max(1.0, q.lpNorm<Eigen::Infinity>());
   double phi_max = std::numeric_limits<double>::infinity();
   for (int it = 0;; ++it) {
     assembler.constraint_values(out.q, t, phi);
@@ -273,8 +279,12 @@ ConsistentStart consistent_start(const System& s, double t, const Vec& q, const 
 
 struct IdaStepper::Impl {
   Impl(const System& system, IdaSettings settings)
-      : s(system), set(settings), n(system.n_dofs()), m(system.n_constraints()),
-        size(2 * n + 2 * m), assembler(system) {}
+      : s(system),
+        set(settings),
+        n(system.n_dofs()),
+        m(system.n_constraints()),
+        size(2 * n + 2 * m),
+        assembler(system) {}
 
   const System& s;
   IdaSettings set;
@@ -479,9 +489,9 @@ struct IdaStepper::Impl {
     view(yy.get()).setZero();
     view(yy.get()).head(n) = s.initial_positions();
     jacobian(0.0, 1.0, view(yy.get()));
-    jmat.reset(check_ptr(SUNSparseMatrix(size, size, std::max<long>(1, jac.nonZeros()), CSC_MAT,
-                                         ctx.get()),
-                         "SUNSparseMatrix"));
+    jmat.reset(check_ptr(
+        SUNSparseMatrix(size, size, std::max<long>(1, jac.nonZeros()), CSC_MAT, ctx.get()),
+        "SUNSparseMatrix"));
     ls.reset(check_ptr(SUNLinSol_KLU(yy.get(), jmat.get(), ctx.get()), "SUNLinSol_KLU"));
   }
 
@@ -494,8 +504,7 @@ struct IdaStepper::Impl {
   double initial_step(const ConsistentStart& c, double interval) const {
     double r = 0.0;
     for (int i = 0; i < n; ++i)
-      if (free_dof(i))
-        r = std::max(r, std::abs(c.a[i]) / (set.rtol * std::abs(c.q[i]) + set.atol));
+      if (free_dof(i)) r = std::max(r, std::abs(c.a[i]) / (set.rtol * std::abs(c.q[i]) + set.atol));
     return r > 0 ? std::min(interval, 1.0 / std::sqrt(r)) : 0.0;  // 0: IDA's own
   }
 
@@ -539,9 +548,10 @@ IdaStepper::IdaStepper(const System& system, IdaSettings settings)
     : impl_(std::make_unique<Impl>(system, settings)) {
   system.validate();
   if (system.n_unilateral() > 0)
-    throw std::invalid_argument("IdaStepper: contact (unilateral constraints) is not supported; "
-                                "the system has " + std::to_string(system.n_unilateral()) +
-                                " candidates");
+    throw std::invalid_argument(
+        "IdaStepper: contact (unilateral constraints) is not supported; "
+        "the system has " +
+        std::to_string(system.n_unilateral()) + " candidates");
   if (!(settings.rtol > 0) || !(settings.atol > 0))
     throw std::invalid_argument("IdaStepper: tolerances must be positive, received rtol = " +
                                 std::to_string(settings.rtol) +
@@ -559,11 +569,21 @@ IdaStepper::~IdaStepper() = default;
 IdaStepper::IdaStepper(IdaStepper&&) noexcept = default;
 IdaStepper& IdaStepper::operator=(IdaStepper&&) noexcept = default;
 
-const IdaSettings& IdaStepper::settings() const { return impl_->set; }
-long IdaStepper::n_initializations() const { return impl_->n_inits; }
-long IdaStepper::n_internal_steps() const { return impl_->steps(); }
-long IdaStepper::n_jacobian_evaluations() const { return impl_->jacs(); }
-long IdaStepper::n_nonlinear_iterations() const { return impl_->iters(); }
+const IdaSettings& IdaStepper::settings() const {
+  return impl_->set;
+}
+long IdaStepper::n_initializations() const {
+  return impl_->n_inits;
+}
+long IdaStepper::n_internal_steps() const {
+  return impl_->steps();
+}
+long IdaStepper::n_jacobian_evaluations() const {
+  return impl_->jacs();
+}
+long IdaStepper::n_nonlinear_iterations() const {
+  return impl_->iters();
+}
 
 StepStats IdaStepper::step(State& state, double dt) {
   Impl& m = *impl_;

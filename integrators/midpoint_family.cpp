@@ -18,14 +18,23 @@ class MidpointFamilyStepper::Problem final : public NewtonProblem {
   // otherwise above 1/eps^(2/3) and made SUNLinSol_KLU redo a full
   // factorization after each cheap numeric refactorization.
   Problem(const System& s, GradientKind kind, const State& start, double dt,
-          const std::vector<const Term*>& extra, const Vec& stiffness_diag, const Vec& full_stiffness)
-      : s_(s), kind_(kind), assembler_(s, extra), q0_(start.q), v0_(start.v), t0_(start.t),
-        t1_(start.t + dt), dt_(dt), k_(stiffness_diag) {
+          const std::vector<const Term*>& extra, const Vec& stiffness_diag,
+          const Vec& full_stiffness)
+      : s_(s),
+        kind_(kind),
+        assembler_(s, extra),
+        q0_(start.q),
+        v0_(start.v),
+        t0_(start.t),
+        t1_(start.t + dt),
+        dt_(dt),
+        k_(stiffness_diag) {
     double sum = 0.0;
     int count = 0;
     const Vec& m = s_.lumped_mass();
     for (int i = 0; i < s_.n_dofs(); ++i)
-      if (!s_.is_prescribed()[static_cast<std::size_t>(i)]) sum += 2.0 * m[i] / (dt * dt) + full_stiffness[i], ++count;
+      if (!s_.is_prescribed()[static_cast<std::size_t>(i)])
+        sum += 2.0 * m[i] / (dt * dt) + full_stiffness[i], ++count;
     kappa_ = count ? sum / count : 1.0;
   }
 
@@ -61,13 +70,15 @@ class MidpointFamilyStepper::Problem final : public NewtonProblem {
     assembler_.add_mass(trip_, 2.0 / (dt_ * dt_));
     force_.setZero(n);
     assembler_.add_potential_forces(kind_, q0_, q1, t0_, t1_, force_, &trip_);
-    assembler_.add_constraint_forces(kind_, q0_, q1, t0_, t1_, lambda, force_, nullptr, &trip_, n, n);
+    assembler_.add_constraint_forces(kind_, q0_, q1, t0_, t1_, lambda, force_, nullptr, &trip_, n,
+                                     n);
     // Loads at the midpoint: d/dq1 of -f(q_mid) is -1/2 df/dq (-df/dq at the end).
     if (!s_.loads().empty())
       s_.add_load_forces(load_point(q1), load_time(), force_, &trip_,
                          kind_ == GradientKind::Exact ? -1.0 : -0.5);
     for (auto& e : trip_)  // G columns and Phi rows carry kappa (see the constructor)
-      if (e.row() >= n || e.col() >= n) e = Eigen::Triplet<double, long>(e.row(), e.col(), kappa_ * e.value());
+      if (e.row() >= n || e.col() >= n)
+        e = Eigen::Triplet<double, long>(e.row(), e.col(), kappa_ * e.value());
     for (const auto& p : s_.prescribed()) trip_.emplace_back(p.dof, p.dof, kappa_);
     j.resize(size(), size());
     j.setFromTriplets(trip_.begin(), trip_.end());
@@ -75,7 +86,9 @@ class MidpointFamilyStepper::Problem final : public NewtonProblem {
 
   // Where the loads act: at the midpoint for the midpoint and discrete
   // gradients, at the end of the step with the forces there (Exact).
-  Vec load_point(const Vec& q1) const { return kind_ == GradientKind::Exact ? q1 : Vec(0.5 * (q0_ + q1)); }
+  Vec load_point(const Vec& q1) const {
+    return kind_ == GradientKind::Exact ? q1 : Vec(0.5 * (q0_ + q1));
+  }
   double load_time() const { return kind_ == GradientKind::Exact ? t1_ : 0.5 * (t0_ + t1_); }
 
   /// Residual scale on momentum rows (see midpoint_family.hpp), 1 / kappa on
@@ -84,7 +97,8 @@ class MidpointFamilyStepper::Problem final : public NewtonProblem {
     Vec sc = Vec::Constant(size(), 1.0 / kappa_);
     const Vec& m = s_.lumped_mass();
     for (int i = 0; i < s_.n_dofs(); ++i)
-      if (!s_.is_prescribed()[static_cast<std::size_t>(i)]) sc[i] = 1.0 / (2.0 * m[i] / (dt_ * dt_) + k_[i]);
+      if (!s_.is_prescribed()[static_cast<std::size_t>(i)])
+        sc[i] = 1.0 / (2.0 * m[i] / (dt_ * dt_) + k_[i]);
     return sc;
   }
 
@@ -103,7 +117,10 @@ class MidpointFamilyStepper::Problem final : public NewtonProblem {
 
 MidpointFamilyStepper::MidpointFamilyStepper(const System& system, GradientKind kind,
                                              NewtonSettings newton, SchemeSettings scheme)
-    : system_(system), kind_(kind), newton_(newton), scheme_(scheme),
+    : system_(system),
+      kind_(kind),
+      newton_(newton),
+      scheme_(scheme),
       gap_tol_(scheme.gap_tolerance > 0 ? scheme.gap_tolerance : 10 * newton.tolerance) {
   system_.validate();
   const int n = system_.n_dofs();
@@ -170,7 +187,8 @@ void MidpointFamilyStepper::velocity_from_momentum_balance(const State& start, c
   Vec load = Vec::Zero(n);
   if (!system_.loads().empty()) {
     const bool at_end = kind_ == GradientKind::Exact;
-    system_.add_load_forces(at_end ? q1 : Vec(0.5 * (start.q + q1)), start.t + (at_end ? dt : 0.5 * dt), load);
+    system_.add_load_forces(at_end ? q1 : Vec(0.5 * (start.q + q1)),
+                            start.t + (at_end ? dt : 0.5 * dt), load);
     force -= load;
     work = load.dot(q1 - start.q);
   }
@@ -183,7 +201,8 @@ void MidpointFamilyStepper::velocity_from_momentum_balance(const State& start, c
   const Vec w = m_ff_.solve(rhs);
   v1 = start.v;
   for (std::size_t i = 0; i < free_.size(); ++i) v1[free_[i]] += w[static_cast<Eigen::Index>(i)];
-  for (const auto& p : system_.prescribed()) v1[p.dof] = p.velocity ? p.velocity(start.t + dt) : 0.0;
+  for (const auto& p : system_.prescribed())
+    v1[p.dof] = p.velocity ? p.velocity(start.t + dt) : 0.0;
 
   // External impulses: the loads' dt f, plus what the supports supplied,
   // M (v1 - v0) + dt (F - f) on the prescribed rows.
@@ -203,7 +222,8 @@ void MidpointFamilyStepper::velocity_from_momentum_balance(const State& start, c
     if (dim == 2) {
       external_angular_impulse_[0] += x[0] * i[1] - x[1] * i[0];
     } else {
-      external_angular_impulse_ += Eigen::Vector3d(x[0], x[1], x[2]).cross(Eigen::Vector3d(i[0], i[1], i[2]));
+      external_angular_impulse_ +=
+          Eigen::Vector3d(x[0], x[1], x[2]).cross(Eigen::Vector3d(i[0], i[1], i[2]));
     }
   }
 }
@@ -237,9 +257,8 @@ StepStats MidpointFamilyStepper::solve(State& state, double dt) {
   return stats;
 }
 
-
-double MidpointFamilyStepper::min_inactive_gap(const State& s, const Vec& q, std::vector<int>* below,
-                                               double threshold) const {
+double MidpointFamilyStepper::min_inactive_gap(const State& s, const Vec& q,
+                                               std::vector<int>* below, double threshold) const {
   double g = std::numeric_limits<double>::infinity();
   for (int id = 0; id < system_.n_unilateral(); ++id) {
     if (std::find(s.active.begin(), s.active.end(), id) != s.active.end()) continue;

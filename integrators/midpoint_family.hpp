@@ -85,12 +85,12 @@ class MidpointFamilyStepper : public Stepper {
   NewtonSolver newton_;
   SchemeSettings scheme_;
   double gap_tol_;
-  Vec stiffness_diag_;      // |K_ii| at the initial configuration, if scaling by it
-  Vec full_stiffness_diag_; // |K_ii| at the initial configuration
+  Vec stiffness_diag_;       // |K_ii| at the initial configuration, if scaling by it
+  Vec full_stiffness_diag_;  // |K_ii| at the initial configuration
   Vec external_impulse_, external_angular_impulse_;  // of the last solve
-  std::vector<int> free_;   // free dofs in order
-  SparseMatrix m_fp_;       // M restricted to free rows, all columns
-  Eigen::SimplicialLDLT<SparseMatrix> m_ff_;  // factor of M on the free dofs
+  std::vector<int> free_;                            // free dofs in order
+  SparseMatrix m_fp_;                                // M restricted to free rows, all columns
+  Eigen::SimplicialLDLT<SparseMatrix> m_ff_;         // factor of M on the free dofs
 };
 
 }  // namespace emdae

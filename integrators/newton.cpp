@@ -18,7 +18,8 @@ namespace emdae {
 namespace {
 
 void check(int flag, const char* call) {
-  if (flag < 0) throw std::runtime_error(std::string(call) + " failed with flag " + std::to_string(flag));
+  if (flag < 0)
+    throw std::runtime_error(std::string(call) + " failed with flag " + std::to_string(flag));
 }
 
 template <class T>
@@ -147,9 +148,11 @@ struct NewtonSolver::Impl {
     const long* op = jac.outerIndexPtr();
     const long* ip = jac.innerIndexPtr();
     const bool same = static_cast<long>(inner.size()) == nnz &&
-                      std::equal(op, op + n + 1, outer.begin()) && std::equal(ip, ip + nnz, inner.begin());
+                      std::equal(op, op + n + 1, outer.begin()) &&
+                      std::equal(ip, ip + nnz, inner.begin());
     if (!same) {
-      if (SUNSparseMatrix_NNZ(jm) < nnz) check(SUNSparseMatrix_Reallocate(jm, nnz), "SUNSparseMatrix_Reallocate");
+      if (SUNSparseMatrix_NNZ(jm) < nnz)
+        check(SUNSparseMatrix_Reallocate(jm, nnz), "SUNSparseMatrix_Reallocate");
       if (!outer.empty())
         check(SUNLinSol_KLUReInit(ls, jm, SUNSparseMatrix_NNZ(jm), SUNKLU_REINIT_PARTIAL),
               "SUNLinSol_KLUReInit");
@@ -166,13 +169,16 @@ struct NewtonSolver::Impl {
 NewtonSolver::NewtonSolver(NewtonSettings settings)
     : settings_(settings), impl_(std::make_unique<Impl>()) {
   if (!(settings_.tolerance > 0)) throw std::invalid_argument("Newton tolerance must be positive");
-  if (settings_.max_iterations < 1) throw std::invalid_argument("Newton max_iterations must be >= 1");
+  if (settings_.max_iterations < 1)
+    throw std::invalid_argument("Newton max_iterations must be >= 1");
 }
 NewtonSolver::~NewtonSolver() = default;
 NewtonSolver::NewtonSolver(NewtonSolver&&) noexcept = default;
 NewtonSolver& NewtonSolver::operator=(NewtonSolver&&) noexcept = default;
 
-long NewtonSolver::n_symbolic_analyses() const { return impl_->symbolic_analyses; }
+long NewtonSolver::n_symbolic_analyses() const {
+  return impl_->symbolic_analyses;
+}
 
 NewtonResult NewtonSolver::solve(NewtonProblem& problem, Vec& x, const Vec& residual_scale) {
   Impl& m = *impl_;
@@ -188,7 +194,8 @@ NewtonResult NewtonSolver::solve(NewtonProblem& problem, Vec& x, const Vec& resi
   Eigen::Map<Vec>(N_VGetArrayPointer(m.u), n) = x;
   Eigen::Map<Vec>(N_VGetArrayPointer(m.fscale), n) = residual_scale;
 
-  const int flag = KINSol(m.kin, m.u, settings_.line_search ? KIN_LINESEARCH : KIN_NONE, m.uscale, m.fscale);
+  const int flag =
+      KINSol(m.kin, m.u, settings_.line_search ? KIN_LINESEARCH : KIN_NONE, m.uscale, m.fscale);
   m.problem = nullptr;
   if (m.error) std::rethrow_exception(m.error);
 
@@ -204,7 +211,8 @@ NewtonResult NewtonSolver::solve(NewtonProblem& problem, Vec& x, const Vec& resi
   free(name);
   const bool polished = flag == KIN_SUCCESS || flag == KIN_INITIAL_GUESS_OK;
   const bool stalled_below_tolerance =
-      (flag == KIN_STEP_LT_STPTOL || flag == KIN_MAXITER_REACHED) && r.residual <= settings_.tolerance;
+      (flag == KIN_STEP_LT_STPTOL || flag == KIN_MAXITER_REACHED) &&
+      r.residual <= settings_.tolerance;
   r.converged = polished || stalled_below_tolerance;
   if (!r.converged && !m.last_message.empty()) r.message += " (" + m.last_message + ")";
   return r;

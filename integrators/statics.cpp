@@ -26,7 +26,8 @@ std::unique_ptr<Term> rotation_hold(const std::vector<int>& nodes, const Vec& x)
     const Eigen::Vector2d r = x.segment<2>(2 * nodes[i]) - c;
     dofs.push_back(2 * nodes[i]), dofs.push_back(2 * nodes[i] + 1);
     x_local.segment<2>(2 * static_cast<Eigen::Index>(i)) = x.segment<2>(2 * nodes[i]);
-    grad.segment<2>(2 * static_cast<Eigen::Index>(i)) = Eigen::Vector2d(-r.y(), r.x());  // d(r x u)/du
+    grad.segment<2>(2 * static_cast<Eigen::Index>(i)) =
+        Eigen::Vector2d(-r.y(), r.x());  // d(r x u)/du
     s += r.squaredNorm();
   }
   grad /= s;
@@ -48,7 +49,8 @@ StaticResult solve_static(System& system, State& state, const StaticSettings& se
   Vec lam = Vec::Zero(n_own + n_holds + static_cast<Eigen::Index>(state.active.size()));
   if (state.lambda.size() == n_own + static_cast<Eigen::Index>(state.active.size())) {
     lam.head(n_own) = state.lambda.head(n_own);
-    lam.tail(static_cast<Eigen::Index>(state.active.size())) = state.lambda.tail(static_cast<Eigen::Index>(state.active.size()));
+    lam.tail(static_cast<Eigen::Index>(state.active.size())) =
+        state.lambda.tail(static_cast<Eigen::Index>(state.active.size()));
   }
   state.lambda = lam;
   StaticResult out = solve_static_held(system, state, settings);
@@ -104,9 +106,10 @@ StaticResult solve_static_held(const System& system, State& state, const StaticS
     if (std::getenv("EMDAE_STATICS_PRINT")) {
       Eigen::Index where = 0;
       (state.q - q_prev).cwiseAbs().maxCoeff(&where);
-      std::fprintf(stderr, "statics: step %d change %.3e at dof %ld, %zu active, %d iterations, %d events\n",
-                   out.steps, out.change, static_cast<long>(where), state.active.size(), r.iterations,
-                   r.contact_events);
+      std::fprintf(
+          stderr, "statics: step %d change %.3e at dof %ld, %zu active, %d iterations, %d events\n",
+          out.steps, out.change, static_cast<long>(where), state.active.size(), r.iterations,
+          r.contact_events);
     }
     if (out.change <= settings.tolerance) {
       state.v.setZero();

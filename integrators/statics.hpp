@@ -5,8 +5,8 @@
 // changing. The mass term 2/h^2 M (q - q_prev) keeps the Newton matrix
 // regular where the static stiffness is singular (a ring held only by
 // frictionless contact can turn freely), and vanishes at convergence, where
-// q = q_prev: the result is the static solution itself. Used for the bearing's pre-stress (paper §5.1),
-// the contact patch test and Hertz.
+// q = q_prev: the result is the static solution itself. Used for the bearing's pre-stress (paper
+// §5.1), the contact patch test and Hertz.
 //
 // A body held only by frictionless contact has a free rigid rotation, and a
 // faceted (polygonal) interface exerts a small moment on it, so the static
@@ -34,7 +34,7 @@ struct StaticResult {
   bool converged = false;
   int steps = 0;
   long newton_iterations = 0;
-  double change = 0.0;  // last max |q_k+1 - q_k|
+  double change = 0.0;                  // last max |q_k+1 - q_k|
   std::vector<double> holding_moments;  // multipliers of the rotation holds
   std::string message;
 };

@@ -21,7 +21,9 @@ State initial_state(const System& system) {
   return s;
 }
 
-std::vector<std::string> known_schemes() { return {"em", "midpoint", "ida", "galpha"}; }
+std::vector<std::string> known_schemes() {
+  return {"em", "midpoint", "ida", "galpha"};
+}
 
 std::unique_ptr<Stepper> make_stepper(const std::string& name, const System& system,
                                       const NewtonSettings& newton, const SchemeSettings& scheme) {

@@ -38,7 +38,7 @@ struct StepStats {
   int iterations = 0;
   double residual = 0.0;
   std::string message;
-  int contact_events = 0;  // impacts located (sub-steps) and releases within the step
+  int contact_events = 0;      // impacts located (sub-steps) and releases within the step
   double external_work = 0.0;  // work of the loads over the step
   // Impulse of the loads and of the supports (prescribed dofs) over the
   // step, and their moments about the origin (2D: one component): the

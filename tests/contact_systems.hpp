@@ -13,7 +13,8 @@ namespace emdae::test_systems {
 /// Edges of a mesh's named edge set, as system node indices.
 inline ContactSurface surface(const Mesh& mesh, const std::string& set, int node_offset) {
   ContactSurface s{set, {}};
-  for (const auto& e : mesh.edge_sets.at(set)) s.edges.push_back({e[0] + node_offset, e[1] + node_offset});
+  for (const auto& e : mesh.edge_sets.at(set))
+    s.edges.push_back({e[0] + node_offset, e[1] + node_offset});
   return s;
 }
 
@@ -34,8 +35,10 @@ inline RingImpact ring_impact(double gap, double speed, double offset, int n_aro
   out.system = std::make_unique<System>(2);
   System& s = *out.system;
   const Material mat = make_material(MaterialModel::SaintVenantKirchhoff, young, 0.1, 0.001);
-  const Mesh left = ring_mesh(Eigen::Vector2d(-r_out - gap / 2, 0), r_in, r_out, n_around, n_through);
-  const Mesh right = ring_mesh(Eigen::Vector2d(r_out + gap / 2, offset), r_in, r_out, n_around, n_through);
+  const Mesh left =
+      ring_mesh(Eigen::Vector2d(-r_out - gap / 2, 0), r_in, r_out, n_around, n_through);
+  const Mesh right =
+      ring_mesh(Eigen::Vector2d(r_out + gap / 2, offset), r_in, r_out, n_around, n_through);
   BodyOptions a, b;
   a.name = "left", a.velocity = Eigen::Vector2d(speed, 0);
   b.name = "right", b.velocity = Eigen::Vector2d(-speed, 0);
@@ -80,8 +83,9 @@ inline Bearing bearing(double torque_peak = 1e4, int through = 10, int around_ou
   b.outer = add_body(s, outer, mat, oo);
   b.inner = add_body(s, inner, mat, io);
   for (int n : outer.node_sets.at("outer")) s.fix_node(n + b.outer.node_offset);
-  auto contact = std::make_unique<MortarContact>(s, surface(inner, "outer", b.inner.node_offset),
-                                                 surface(outer, "inner", b.outer.node_offset), "bearing");
+  auto contact =
+      std::make_unique<MortarContact>(s, surface(inner, "outer", b.inner.node_offset),
+                                      surface(outer, "inner", b.outer.node_offset), "bearing");
   b.contact = contact.get();
   s.add_unilateral(std::move(contact));
   std::vector<int> torque_nodes;

@@ -17,7 +17,8 @@ namespace emdae::test_systems {
 /// force, no support: energy, linear and angular momentum are conserved.
 inline std::unique_ptr<System> four_particle_system() {
   auto s = std::make_unique<System>(3);
-  const Eigen::Vector3d x[4] = {{1.0, 0.0, -0.3}, {-0.5, 0.9, 0.1}, {-0.4, -0.8, 0.2}, {0.1, 0.1, 1.2}};
+  const Eigen::Vector3d x[4] = {
+      {1.0, 0.0, -0.3}, {-0.5, 0.9, 0.1}, {-0.4, -0.8, 0.2}, {0.1, 0.1, 1.2}};
   const double m[4] = {1.0, 2.0, 1.5, 0.7};
   const Eigen::Vector3d omega(0.3, -0.5, 1.1), drift(0.2, -0.1, 0.05);
   for (int i = 0; i < 4; ++i) {

@@ -61,6 +61,8 @@ class PendulumReference {
   double y_[2] = {M_PI / 2, 1.0};
 };
 
-inline PendulumState pendulum_reference(double t) { return PendulumReference().at(t); }
+inline PendulumState pendulum_reference(double t) {
+  return PendulumReference().at(t);
+}
 
 }  // namespace emdae::test_systems

@@ -295,9 +295,9 @@ TEST(Cli, NoArgumentsRunsTheBuiltInDefaultScene) {
   ASSERT_TRUE(s["contact_window"].is_array()) << s;
   EXPECT_NEAR(s["contact_window"][0].get<double>(), 6.1, 0.1);
   EXPECT_NEAR(s["contact_window"][1].get<double>(), 15.4, 0.3);
-  EXPECT_EQ(read_lines(dir / "out/default/history.csv")[0],
-            std::string(kHeader2D) +
-                ",active_contacts,contact_events,gap_violation_max,penetration_max");
+  EXPECT_EQ(
+      read_lines(dir / "out/default/history.csv")[0],
+      std::string(kHeader2D) + ",active_contacts,contact_events,gap_violation_max,penetration_max");
 }
 
 TEST(Cli, NumericalFailureExitsThreeAndKeepsTheRecord) {

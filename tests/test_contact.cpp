@@ -58,8 +58,10 @@ TEST(MortarPairGap, JetDerivativesMatchFiniteDifferences) {
         pp[k] += h, pm[k] -= h;
         EXPECT_NEAR(f.g[k], (mortar_pair_gap(pp, a) - mortar_pair_gap(pm, a)) / (2 * h), 1e-8);
         Jet<5> jp[5], jm[5];
-        for (int j = 0; j < 5; ++j) jp[j] = Jet<5>::variable(pp[j], j), jm[j] = Jet<5>::variable(pm[j], j);
-        const Eigen::Matrix<double, 5, 1> fd = (mortar_pair_gap(jp, a).g - mortar_pair_gap(jm, a).g) / (2 * h);
+        for (int j = 0; j < 5; ++j)
+          jp[j] = Jet<5>::variable(pp[j], j), jm[j] = Jet<5>::variable(pm[j], j);
+        const Eigen::Matrix<double, 5, 1> fd =
+            (mortar_pair_gap(jp, a).g - mortar_pair_gap(jm, a).g) / (2 * h);
         EXPECT_LE((f.h.col(k) - fd).norm(), 1e-6);
       }
     }
@@ -108,7 +110,8 @@ TEST(MortarGapTerm, InvariantUnderRigidMotion) {
     Eigen::Matrix2d r;
     r << std::cos(a), -std::sin(a), std::sin(a), std::cos(a);
     Vec moved(14);
-    for (int n = 0; n < 7; ++n) moved.segment<2>(2 * n) = r * q.segment<2>(2 * n) + Eigen::Vector2d(3, -1);
+    for (int n = 0; n < 7; ++n)
+      moved.segment<2>(2 * n) = r * q.segment<2>(2 * n) + Eigen::Vector2d(3, -1);
     EXPECT_NEAR(term->value(moved, 0), term->value(q, 0), 1e-13);
   }
 }
@@ -138,7 +141,8 @@ ImpactFigures run_impact(const RingImpact& scene, const char* scheme, double dt,
                                             std::max(1.0, q0.linear_momentum.norm()));
         f.ang_err = std::max(f.ang_err, (q.angular_momentum - q0.angular_momentum).norm() /
                                             q0.angular_momentum.norm());
-        for (int id : x.active) f.active_gap = std::max(f.active_gap, std::abs(s.unilateral_gap(id, x.q)));
+        for (int id : x.active)
+          f.active_gap = std::max(f.active_gap, std::abs(s.unilateral_gap(id, x.q)));
         for (int id = 0; id < s.n_unilateral(); ++id)
           if (std::find(x.active.begin(), x.active.end(), id) == x.active.end())
             f.min_inactive_gap = std::min(f.min_inactive_gap, s.unilateral_gap(id, x.q));
@@ -158,10 +162,11 @@ TEST(RingImpact, EnergyMomentumConservesThroughImpact) {
   const RingImpact scene = ring_impact(0.5, 10.0, 4.0);
   const ImpactFigures f = run_impact(scene, "em", 0.01, 1.5, true);
   ASSERT_TRUE(f.ok) << f.message;
-  std::printf("em ring impact: energy %.2e linear %.2e angular %.2e active gap %.2e min inactive gap "
-              "%.2e max active %d contact [%.3f, %.3f]\n",
-              f.energy_err, f.lin_err, f.ang_err, f.active_gap, f.min_inactive_gap, f.max_active,
-              f.first_contact, f.last_contact);
+  std::printf(
+      "em ring impact: energy %.2e linear %.2e angular %.2e active gap %.2e min inactive gap "
+      "%.2e max active %d contact [%.3f, %.3f]\n",
+      f.energy_err, f.lin_err, f.ang_err, f.active_gap, f.min_inactive_gap, f.max_active,
+      f.first_contact, f.last_contact);
   EXPECT_GE(f.max_active, 2);
   EXPECT_LE(f.energy_err, 1e-8);
   EXPECT_LE(f.lin_err, 1e-10);

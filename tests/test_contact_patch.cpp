@@ -41,7 +41,8 @@ Blocks stacked_blocks(int n_lower, int n_upper, double squeeze, MaterialModel mo
   // Rollers at the base (y fixed), one node also fixed in x; the top pressed
   // down by `squeeze`, its left corner fixed in x (the upper block would
   // otherwise slide freely on the frictionless interface).
-  for (int n : lower.node_sets.at("bottom")) s.prescribe({s.dof(n + b.lower.node_offset, 1), {}, {}});
+  for (int n : lower.node_sets.at("bottom"))
+    s.prescribe({s.dof(n + b.lower.node_offset, 1), {}, {}});
   s.prescribe({s.dof(lower.node_sets.at("bottom").front() + b.lower.node_offset, 0), {}, {}});
   for (int n : upper.node_sets.at("top")) {
     const int node = n + b.upper.node_offset;
@@ -49,8 +50,9 @@ Blocks stacked_blocks(int n_lower, int n_upper, double squeeze, MaterialModel mo
     s.prescribe({s.dof(node, 1), [y](double) { return y; }, {}});
   }
   s.prescribe({s.dof(upper.node_sets.at("top").front() + b.upper.node_offset, 0), {}, {}});
-  auto contact = std::make_unique<MortarContact>(s, surface(upper, "bottom", b.upper.node_offset),
-                                                 surface(lower, "top", b.lower.node_offset), "interface");
+  auto contact =
+      std::make_unique<MortarContact>(s, surface(upper, "bottom", b.upper.node_offset),
+                                      surface(lower, "top", b.lower.node_offset), "interface");
   b.contact = contact.get();
   s.add_unilateral(std::move(contact));
   return b;
@@ -69,29 +71,33 @@ TEST_P(ContactPatch, NonMatchingMeshesTransmitUniformPressure) {
   ASSERT_EQ(static_cast<int>(st.active.size()), b.contact->size());  // the whole interface
   std::vector<double> p;
   for (std::size_t k = 0; k < st.active.size(); ++k)
-    p.push_back(-st.lambda[n_static + static_cast<Eigen::Index>(k)] / b.contact->weight(st.active[k]));
+    p.push_back(-st.lambda[n_static + static_cast<Eigen::Index>(k)] /
+                b.contact->weight(st.active[k]));
   const double p_mean = std::accumulate(p.begin(), p.end(), 0.0) / static_cast<double>(p.size());
   double spread = 0.0;
   for (double pi : p) spread = std::max(spread, std::abs(pi - p_mean));
   // sigma_yy from the stress of one element of the upper block: S is the
   // 2nd Piola-Kirchhoff stress; the Cauchy stress sigma = F S F^T / det F.
-  const auto* element = dynamic_cast<const Q1Element*>(b.system->potentials()[static_cast<std::size_t>(b.upper.first_potential)].get());
+  const auto* element = dynamic_cast<const Q1Element*>(
+      b.system->potentials()[static_cast<std::size_t>(b.upper.first_potential)].get());
   ASSERT_NE(element, nullptr);
   Vec local;
   gather(*element, st.q, local);
   const Eigen::Matrix2d f = element->deformation_gradient(local, 0);
-  const Eigen::Matrix2d sigma = f * element->second_piola_kirchhoff(local, 0) * f.transpose() / f.determinant();
+  const Eigen::Matrix2d sigma =
+      f * element->second_piola_kirchhoff(local, 0) * f.transpose() / f.determinant();
   std::printf("contact patch (%s): %zu slave nodes, p = %.12f, spread %.2e, -sigma_yy %.12f\n",
               material_model_name(GetParam()).c_str(), p.size(), p_mean, spread, -sigma(1, 1));
-  EXPECT_GT(p_mean, 0.0);                       // compressive
-  EXPECT_LE(spread, 1e-8 * p_mean);             // uniform
+  EXPECT_GT(p_mean, 0.0);                            // compressive
+  EXPECT_LE(spread, 1e-8 * p_mean);                  // uniform
   EXPECT_NEAR(p_mean, -sigma(1, 1), 1e-8 * p_mean);  // and equal to the blocks' stress
   for (std::size_t k = 0; k < st.active.size(); ++k)
     EXPECT_LE(std::abs(b.system->unilateral_gap(st.active[k], st.q)), 1e-11);
 }
 
 INSTANTIATE_TEST_SUITE_P(Materials, ContactPatch,
-                         ::testing::Values(MaterialModel::SaintVenantKirchhoff, MaterialModel::NeoHooke));
+                         ::testing::Values(MaterialModel::SaintVenantKirchhoff,
+                                           MaterialModel::NeoHooke));
 
 }  // namespace
 }  // namespace emdae

@@ -58,15 +58,14 @@ Outcome run_galpha(const System& s, const GeneralizedAlphaSettings& p, double dt
   State st = initial_state(s);
   Outcome r;
   r.energy.push_back(measure(s, st.q, st.v, st.t).total());
-  const RunOutcome out = integrate(stepper, st, TimeSettings{dt, t_end, 0.0},
-                                   [&](const State& x, const AcceptedStep& a) {
-                                     const Quantities qn = measure(s, x.q, x.v, x.t);
-                                     r.energy.push_back(qn.total());
-                                     r.phi_max = std::max(r.phi_max, qn.phi_max);
-                                     r.gv_max = std::max(r.gv_max, std::abs(x.q.dot(x.v)));
-                                     r.max_iterations = std::max(r.max_iterations,
-                                                                 a.stats.iterations);
-                                   });
+  const RunOutcome out = integrate(
+      stepper, st, TimeSettings{dt, t_end, 0.0}, [&](const State& x, const AcceptedStep& a) {
+        const Quantities qn = measure(s, x.q, x.v, x.t);
+        r.energy.push_back(qn.total());
+        r.phi_max = std::max(r.phi_max, qn.phi_max);
+        r.gv_max = std::max(r.gv_max, std::abs(x.q.dot(x.v)));
+        r.max_iterations = std::max(r.max_iterations, a.stats.iterations);
+      });
   r.ok = out.ok;
   r.final = st;
   r.mean_iterations = out.steps ? double(out.newton_iterations) / double(out.steps) : 0.0;
@@ -105,10 +104,10 @@ Orders observed_orders(const System& s, const GeneralizedAlphaSettings& p, const
     EXPECT_TRUE(r.ok) << label << " dt " << dt;
     eq.push_back((Vec(r.final.q) - ref.q).norm());
     el.push_back(std::abs(r.final.lambda[0] - ref.lambda));
-    std::printf("%s dt %.3f: position error %.3e, lambda error %.3e, max |Phi| %.1e, "
-                "max |Gv| %.1e, Newton iterations mean %.2f max %d\n",
-                label, dt, eq.back(), el.back(), r.phi_max, r.gv_max, r.mean_iterations,
-                r.max_iterations);
+    std::printf(
+        "%s dt %.3f: position error %.3e, lambda error %.3e, max |Phi| %.1e, "
+        "max |Gv| %.1e, Newton iterations mean %.2f max %d\n",
+        label, dt, eq.back(), el.back(), r.phi_max, r.gv_max, r.mean_iterations, r.max_iterations);
   }
   Orders o{slope(dts, eq), slope(dts, el), el};
   std::printf("%s: observed order %.3f (q), %.3f (lambda)\n", label, o.q, o.lambda);
@@ -140,8 +139,7 @@ TEST(GeneralizedAlphaPendulum, SecondOrderRhoPointEight) {
 
 TEST(GeneralizedAlphaPendulum, SecondOrderHhtAndNewmark) {
   auto s = pendulum();
-  EXPECT_NEAR(observed_orders(*s, GeneralizedAlphaSettings::hht(0.8), "hht rho 0.8").q, 2.0,
-              0.15);
+  EXPECT_NEAR(observed_orders(*s, GeneralizedAlphaSettings::hht(0.8), "hht rho 0.8").q, 2.0, 0.15);
   EXPECT_NEAR(observed_orders(*s, GeneralizedAlphaSettings::newmark(), "newmark").q, 2.0, 0.15);
 }
 
@@ -154,8 +152,8 @@ TEST(GeneralizedAlphaPendulum, Index3FormLosesTheMultiplierAtRhoOne) {
       observed_orders(*s, index3(GeneralizedAlphaSettings::chung_hulbert(1.0)), "index-3 rho 1");
   EXPECT_NEAR(one.q, 2.0, 0.15);
   for (double e : one.lambda_errors) EXPECT_GE(e, 0.5);  // measured 1.05
-  const Orders damped = observed_orders(
-      *s, index3(GeneralizedAlphaSettings::chung_hulbert(0.8)), "index-3 rho 0.8");
+  const Orders damped =
+      observed_orders(*s, index3(GeneralizedAlphaSettings::chung_hulbert(0.8)), "index-3 rho 0.8");
   EXPECT_NEAR(damped.q, 2.0, 0.15);
   EXPECT_LE(damped.lambda_errors.back(), 1e-4);  // measured 1.3e-5
 }
@@ -163,7 +161,7 @@ TEST(GeneralizedAlphaPendulum, Index3FormLosesTheMultiplierAtRhoOne) {
 // Energy after every step of a run, and the maximum of each pendulum period
 // (8.626 time units at this amplitude, from the complete elliptic integral).
 struct EnergyRecord {
-  double loss = 0.0;                 // E(0) - E(t_end)
+  double loss = 0.0;  // E(0) - E(t_end)
   std::vector<double> period_maxima;
   // Decay of the envelope, first period's maximum minus last period's: free
   // of the phase-dependent oscillation of E within a period.
@@ -200,12 +198,12 @@ TEST(GeneralizedAlphaPendulum, DissipationWithRhoBelowOne) {
   const EnergyRecord eight = energy_record(*s, 0.8, dt, t_end);
   const EnergyRecord one = energy_record(*s, 1.0, dt, t_end);
   const EnergyRecord one_fine = energy_record(*s, 1.0, dt / 2, t_end);
-  std::printf("galpha dt %.2f over [0, %.0f], E(0) - E(t_end) (E(0) = 0.5): rho 0.5 %.3e, "
-              "rho 0.8 %.3e, rho 1 %.3e; decay of the maximum per period over %zu periods: "
-              "rho 0.5 %.3e, rho 0.8 %.3e, rho 1 %.3e, rho 1 with dt/2 %.3e\n",
-              dt, t_end, half.loss, eight.loss, one.loss, half.period_maxima.size(),
-              half.envelope_loss(), eight.envelope_loss(), one.envelope_loss(),
-              one_fine.envelope_loss());
+  std::printf(
+      "galpha dt %.2f over [0, %.0f], E(0) - E(t_end) (E(0) = 0.5): rho 0.5 %.3e, "
+      "rho 0.8 %.3e, rho 1 %.3e; decay of the maximum per period over %zu periods: "
+      "rho 0.5 %.3e, rho 0.8 %.3e, rho 1 %.3e, rho 1 with dt/2 %.3e\n",
+      dt, t_end, half.loss, eight.loss, one.loss, half.period_maxima.size(), half.envelope_loss(),
+      eight.envelope_loss(), one.envelope_loss(), one_fine.envelope_loss());
   // Measured: E(0) - E(t_end) 3.5e-2, 7.2e-3, 5.9e-3; envelope decays
   // 2.0e-2, 3.5e-3, 2.7e-3 and 3.4e-4.
   EXPECT_GE(half.loss, 2.5e-2);
@@ -227,9 +225,10 @@ TEST(GeneralizedAlphaPendulum, ConstraintHeldToNewtonTolerance) {
     const auto p = GeneralizedAlphaSettings::chung_hulbert(rho);
     const Outcome r = run_galpha(*s, p, dt, 10.0);
     ASSERT_TRUE(r.ok) << "rho " << rho;
-    std::printf("galpha rho %.1f dt %.2f: max |Phi| %.2e, max |Gv| %.2e, Newton iterations mean "
-                "%.2f max %d\n",
-                rho, dt, r.phi_max, r.gv_max, r.mean_iterations, r.max_iterations);
+    std::printf(
+        "galpha rho %.1f dt %.2f: max |Phi| %.2e, max |Gv| %.2e, Newton iterations mean "
+        "%.2f max %d\n",
+        rho, dt, r.phi_max, r.gv_max, r.mean_iterations, r.max_iterations);
     EXPECT_LE(r.phi_max, kNewtonTol) << "rho " << rho;
     // The velocity rows are scaled by beta h / gamma.
     EXPECT_LE(r.gv_max, kNewtonTol * p.gamma / (p.beta * dt)) << "rho " << rho;

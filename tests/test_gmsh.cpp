@@ -12,9 +12,9 @@
 #include <cstdio>
 #include <fstream>
 
+#include "core/assembly.hpp"
 #include "core/gmsh_reader.hpp"
 #include "core/gradient.hpp"
-#include "core/assembly.hpp"
 
 namespace emdae {
 namespace {
@@ -23,7 +23,8 @@ const std::string kPlate = std::string(EMDAE_EXAMPLES_DIR) + "/meshes/plate_with
 
 double edge_length(const Mesh& m, const std::string& set) {
   double l = 0.0;
-  for (const auto& e : m.edge_sets.at(set)) l += (m.nodes[static_cast<std::size_t>(e[1])] - m.nodes[static_cast<std::size_t>(e[0])]).norm();
+  for (const auto& e : m.edge_sets.at(set))
+    l += (m.nodes[static_cast<std::size_t>(e[1])] - m.nodes[static_cast<std::size_t>(e[0])]).norm();
   return l;
 }
 
@@ -47,14 +48,17 @@ TEST(Gmsh, ReadsThePlateWithItsPhysicalGroups) {
   EXPECT_NEAR(edge_length(m, "left"), 2.0, 1e-12);
   EXPECT_NEAR(edge_length(m, "right"), 2.0, 1e-12);
   // Outward normal (dy, -dx) of each edge: out of the plate.
-  const std::map<std::string, Eigen::Vector2d> out = {{"bottom", {0, -1}}, {"top", {0, 1}}, {"left", {-1, 0}}, {"right", {1, 0}}};
+  const std::map<std::string, Eigen::Vector2d> out = {
+      {"bottom", {0, -1}}, {"top", {0, 1}}, {"left", {-1, 0}}, {"right", {1, 0}}};
   for (const auto& [name, dir] : out)
     for (const auto& e : m.edge_sets.at(name)) {
-      const Eigen::Vector2d d = m.nodes[static_cast<std::size_t>(e[1])] - m.nodes[static_cast<std::size_t>(e[0])];
+      const Eigen::Vector2d d =
+          m.nodes[static_cast<std::size_t>(e[1])] - m.nodes[static_cast<std::size_t>(e[0])];
       EXPECT_GT(Eigen::Vector2d(d.y(), -d.x()).dot(dir), 0.0) << name;
     }
   for (const auto& e : m.edge_sets.at("hole")) {  // into the hole, towards its centre
-    const Eigen::Vector2d a = m.nodes[static_cast<std::size_t>(e[0])], b = m.nodes[static_cast<std::size_t>(e[1])];
+    const Eigen::Vector2d a = m.nodes[static_cast<std::size_t>(e[0])],
+                          b = m.nodes[static_cast<std::size_t>(e[1])];
     const Eigen::Vector2d d = b - a;
     EXPECT_GT(Eigen::Vector2d(d.y(), -d.x()).dot(Eigen::Vector2d(1, 1) - 0.5 * (a + b)), 0.0);
   }
@@ -68,7 +72,8 @@ TEST(Gmsh, ConstantStrainPatchTestOnTheImportedMesh) {
   f0 << 1.05, 0.02, -0.03, 0.97;
   Vec q = s.initial_positions();
   for (int n = 0; n < m.n_nodes(); ++n)
-    q.segment<2>(2 * (n + body.node_offset)) = f0 * m.nodes[static_cast<std::size_t>(n)] + Eigen::Vector2d(0.3, -0.1);
+    q.segment<2>(2 * (n + body.node_offset)) =
+        f0 * m.nodes[static_cast<std::size_t>(n)] + Eigen::Vector2d(0.3, -0.1);
   std::vector<bool> boundary(static_cast<std::size_t>(m.n_nodes()), false);
   for (const auto& [name, nodes] : m.node_sets)
     for (int n : nodes) boundary[static_cast<std::size_t>(n)] = true;
@@ -78,7 +83,8 @@ TEST(Gmsh, ConstantStrainPatchTestOnTheImportedMesh) {
   double interior = 0.0, scale = 0.0;
   for (int n = 0; n < m.n_nodes(); ++n) {
     scale = std::max(scale, force.segment<2>(2 * n).norm());
-    if (!boundary[static_cast<std::size_t>(n)]) interior = std::max(interior, force.segment<2>(2 * n).norm());
+    if (!boundary[static_cast<std::size_t>(n)])
+      interior = std::max(interior, force.segment<2>(2 * n).norm());
   }
   EXPECT_GT(scale, 1.0);
   EXPECT_LE(interior, 1e-11 * scale);
@@ -101,12 +107,17 @@ TEST(Gmsh, ErrorsNameFileLineAndWhat) {
   };
   EXPECT_NE(message("/nonexistent/mesh.msh").find("cannot open"), std::string::npos);
   const std::string v2 = write_temp("v2.msh", "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n");
-  EXPECT_NE(message(v2).find("v2.msh:2: MSH version 2.2 is not supported"), std::string::npos) << message(v2);
+  EXPECT_NE(message(v2).find("v2.msh:2: MSH version 2.2 is not supported"), std::string::npos)
+      << message(v2);
   const std::string tri = write_temp("tri.msh",
-      "$MeshFormat\n4.1 0 8\n$EndMeshFormat\n$Nodes\n1 3 1 3\n2 1 0 3\n1\n2\n3\n0 0 0\n1 0 0\n0 1 0\n$EndNodes\n"
-      "$Elements\n1 1 1 1\n2 1 2 1\n1 1 2 3\n$EndElements\n");
-  EXPECT_NE(message(tri).find("tri.msh:17: surface element of type 2"), std::string::npos) << message(tri);
-  EXPECT_NE(message(kPlate, "no_such_surface").find("no quadrilaterals in physical surface 'no_such_surface'"), std::string::npos);
+                                     "$MeshFormat\n4.1 0 8\n$EndMeshFormat\n$Nodes\n1 3 1 3\n2 1 0 "
+                                     "3\n1\n2\n3\n0 0 0\n1 0 0\n0 1 0\n$EndNodes\n"
+                                     "$Elements\n1 1 1 1\n2 1 2 1\n1 1 2 3\n$EndElements\n");
+  EXPECT_NE(message(tri).find("tri.msh:17: surface element of type 2"), std::string::npos)
+      << message(tri);
+  EXPECT_NE(message(kPlate, "no_such_surface")
+                .find("no quadrilaterals in physical surface 'no_such_surface'"),
+            std::string::npos);
   EXPECT_NE(message(write_temp("text.msh", "hello\n")).find("not a Gmsh mesh"), std::string::npos);
 }
 

@@ -23,7 +23,8 @@ struct Fixture {
   std::vector<std::unique_ptr<Term>> terms;
   Fixture() {
     for (int i = 0; i < 3; ++i) {
-      system.add_node(Eigen::Vector2d(std::cos(2.0 * i), std::sin(2.0 * i)), Eigen::Vector2d::Zero());
+      system.add_node(Eigen::Vector2d(std::cos(2.0 * i), std::sin(2.0 * i)),
+                      Eigen::Vector2d::Zero());
       system.add_mass(i, i, 1.0);
     }
     terms.push_back(make_spring(system, 0, 1, 7.0, 0.8, SpringLaw::Linear));

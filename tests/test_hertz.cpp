@@ -49,7 +49,8 @@ HertzFigures hertz(int around, int through, int nx, int ny) {
     const int node = n + br.node_offset;
     const double y0 = s.initial_positions()[s.dof(node, 1)];
     s.prescribe({s.dof(node, 0), {}, {}});
-    s.prescribe({s.dof(node, 1), [y0, push](double t) { return y0 - push * std::min(t, 1.0); }, {}});
+    s.prescribe(
+        {s.dof(node, 1), [y0, push](double t) { return y0 - push * std::min(t, 1.0); }, {}});
   }
   auto contact = std::make_unique<MortarContact>(s, surface(ring, "outer", br.node_offset),
                                                  surface(block, "top", bb.node_offset), "hertz");
@@ -84,10 +85,11 @@ HertzFigures hertz(int around, int through, int nx, int ny) {
   const double e_star = young / (2 * (1 - nu * nu));
   out.a_hertz = std::sqrt(4 * out.force * r / (M_PI * e_star));
   out.p0_hertz = 2 * out.force / (M_PI * out.a_hertz);
-  std::printf("hertz %6d dofs, %3d contact nodes: F %.5f, a %.5f (Hertz %.5f, %+.2f %%), "
-              "p0 %.4f (Hertz %.4f, %+.2f %%), %.1f s\n",
-              out.dofs, out.contact_nodes, out.force, out.a, out.a_hertz, 100 * out.a_err(), out.p0,
-              out.p0_hertz, 100 * out.p0_err(), out.seconds);
+  std::printf(
+      "hertz %6d dofs, %3d contact nodes: F %.5f, a %.5f (Hertz %.5f, %+.2f %%), "
+      "p0 %.4f (Hertz %.4f, %+.2f %%), %.1f s\n",
+      out.dofs, out.contact_nodes, out.force, out.a, out.a_hertz, 100 * out.a_err(), out.p0,
+      out.p0_hertz, 100 * out.p0_err(), out.seconds);
   return out;
 }
 

@@ -71,16 +71,15 @@ Outcome run_ida(const System& s, IdaStepper& stepper, double dt, double t_end) {
   State st = initial_state(s);
   const double e0 = measure(s, st.q, st.v, st.t).total();
   Outcome r;
-  const RunOutcome out = integrate(stepper, st, TimeSettings{dt, t_end, 0.0},
-                                   [&](const State& x, const AcceptedStep&) {
-                                     const Quantities qn = measure(s, x.q, x.v, x.t);
-                                     r.energy_drift = std::max(r.energy_drift,
-                                                               std::abs(qn.total() - e0));
-                                     r.phi_max = std::max(r.phi_max, qn.phi_max);
-                                     // The pendulum's G v = q . v (Phi = (|q|^2 - 1)/2).
-                                     const Vec qb = x.q.tail(2), vb = x.v.tail(2);
-                                     r.gv_max = std::max(r.gv_max, std::abs(qb.dot(vb)));
-                                   });
+  const RunOutcome out = integrate(
+      stepper, st, TimeSettings{dt, t_end, 0.0}, [&](const State& x, const AcceptedStep&) {
+        const Quantities qn = measure(s, x.q, x.v, x.t);
+        r.energy_drift = std::max(r.energy_drift, std::abs(qn.total() - e0));
+        r.phi_max = std::max(r.phi_max, qn.phi_max);
+        // The pendulum's G v = q . v (Phi = (|q|^2 - 1)/2).
+        const Vec qb = x.q.tail(2), vb = x.v.tail(2);
+        r.gv_max = std::max(r.gv_max, std::abs(qb.dot(vb)));
+      });
   r.ok = out.ok;
   r.message = out.message;
   r.final = st;
@@ -100,10 +99,11 @@ TEST(IdaPendulum, MatchesReferenceAtTightTolerance) {
   const Outcome r = run_ida(*s, ida, 0.1, 1.0);
   ASSERT_TRUE(r.ok);
   const double err = position_error(r.final, ref);
-  std::printf("ida tol 1e-10: position error %.3e, velocity error %.3e, %ld internal steps, "
-              "%ld Newton iterations, %ld Jacobians\n",
-              err, (Vec(r.final.v) - ref.v).norm(), ida.n_internal_steps(),
-              ida.n_nonlinear_iterations(), ida.n_jacobian_evaluations());
+  std::printf(
+      "ida tol 1e-10: position error %.3e, velocity error %.3e, %ld internal steps, "
+      "%ld Newton iterations, %ld Jacobians\n",
+      err, (Vec(r.final.v) - ref.v).norm(), ida.n_internal_steps(), ida.n_nonlinear_iterations(),
+      ida.n_jacobian_evaluations());
   EXPECT_LE(err, 1e-8);
   EXPECT_NEAR(r.final.t, 1.0, 1e-14);
   // The multiplier is the link tension per unit length: from q . a + |v|^2 = 0
@@ -153,9 +153,10 @@ TEST(IdaPendulum, ErrorIsProportionalToTolerance) {
       }
     }
     const double err = std::pow(10.0, log_sum / n_f);
-    std::printf("ida tol 1e-%d: max position error on [0, 10] %.3e (error/tol %.0f); at tol "
-                "itself %ld internal steps, %ld Newton iterations\n",
-                decade, err, err / tol, steps, iterations);
+    std::printf(
+        "ida tol 1e-%d: max position error on [0, 10] %.3e (error/tol %.0f); at tol "
+        "itself %ld internal steps, %ld Newton iterations\n",
+        decade, err, err / tol, steps, iterations);
     if (k > 0) {
       EXPECT_GE(previous / err, 2.0) << "tol " << tol;
     }
@@ -177,10 +178,11 @@ TEST(IdaPendulum, EnergyDriftAtDefaultTolerance) {
   IdaStepper ida(*s);
   const Outcome r = run_ida(*s, ida, 0.01, 10.0);
   ASSERT_TRUE(r.ok);
-  std::printf("ida default tol over [0, 10]: energy drift %.3e, max |Phi| %.3e, max |Gv| %.3e, "
-              "%ld internal steps, %ld Newton iterations, %ld Jacobians\n",
-              r.energy_drift, r.phi_max, r.gv_max, ida.n_internal_steps(),
-              ida.n_nonlinear_iterations(), ida.n_jacobian_evaluations());
+  std::printf(
+      "ida default tol over [0, 10]: energy drift %.3e, max |Phi| %.3e, max |Gv| %.3e, "
+      "%ld internal steps, %ld Newton iterations, %ld Jacobians\n",
+      r.energy_drift, r.phi_max, r.gv_max, ida.n_internal_steps(), ida.n_nonlinear_iterations(),
+      ida.n_jacobian_evaluations());
   EXPECT_LE(r.energy_drift, 1.5e-6);  // measured 4.4e-7
   EXPECT_LE(r.phi_max, 1e-6);
   EXPECT_LE(r.gv_max, 1e-6);

@@ -5,10 +5,9 @@
 //    does not (its error is recorded and asserted);
 //  - observed order of accuracy 2 for both steppers from four step sizes;
 //  - Newton converges in a few iterations, quadratically.
-#include <gtest/gtest.h>
-
 #include <gsl/gsl_errno.h>
 #include <gsl/gsl_odeiv2.h>
+#include <gtest/gtest.h>
 
 #include <cmath>
 
@@ -33,20 +32,17 @@ RunFigures run(const System& s, const std::string& scheme, double dt, double t_e
   State st = initial_state(s);
   const Quantities q0 = measure(s, st.q, st.v, st.t);
   RunFigures r;
-  const RunOutcome out = integrate(*stepper, st, TimeSettings{dt, t_end, dt / 16},
-                                   [&](const State& x, const AcceptedStep& a) {
-                                     const Quantities q = measure(s, x.q, x.v, x.t);
-                                     r.energy_err = std::max(r.energy_err,
-                                                             std::abs(q.total() - q0.total()) /
-                                                                 std::abs(q0.total()));
-                                     r.lin_err = std::max(r.lin_err,
-                                                          (q.linear_momentum - q0.linear_momentum).norm());
-                                     r.ang_err = std::max(r.ang_err,
-                                                          (q.angular_momentum - q0.angular_momentum).norm() /
-                                                              q0.angular_momentum.norm());
-                                     r.phi_max = std::max(r.phi_max, q.phi_max);
-                                     r.max_iters = std::max(r.max_iters, a.stats.iterations);
-                                   });
+  const RunOutcome out = integrate(
+      *stepper, st, TimeSettings{dt, t_end, dt / 16}, [&](const State& x, const AcceptedStep& a) {
+        const Quantities q = measure(s, x.q, x.v, x.t);
+        r.energy_err =
+            std::max(r.energy_err, std::abs(q.total() - q0.total()) / std::abs(q0.total()));
+        r.lin_err = std::max(r.lin_err, (q.linear_momentum - q0.linear_momentum).norm());
+        r.ang_err = std::max(r.ang_err, (q.angular_momentum - q0.angular_momentum).norm() /
+                                            q0.angular_momentum.norm());
+        r.phi_max = std::max(r.phi_max, q.phi_max);
+        r.max_iters = std::max(r.max_iters, a.stats.iterations);
+      });
   r.ok = out.ok;
   r.mean_iters = out.steps ? double(out.newton_iterations) / double(out.steps) : 0;
   r.final = st;
@@ -107,7 +103,9 @@ TEST(StiffPendulum, MidpointLosesEnergyStabilitySideBySide) {
 // route: GSL's rk8pd on the unconstrained ODE m x'' = -k (|x| - L) x/|x| + m g,
 // to 1e-14.
 Vec elastic_pendulum_reference(const System& s, double k, double t_end) {
-  struct P { double k; } par{k};
+  struct P {
+    double k;
+  } par{k};
   auto rhs = [](double, const double y[], double f[], void* p) -> int {
     const double kk = static_cast<P*>(p)->k;
     const double r = std::hypot(y[0], y[1]);
@@ -119,7 +117,8 @@ Vec elastic_pendulum_reference(const System& s, double k, double t_end) {
     return GSL_SUCCESS;
   };
   gsl_odeiv2_system sys{rhs, nullptr, 4, &par};
-  gsl_odeiv2_driver* d = gsl_odeiv2_driver_alloc_y_new(&sys, gsl_odeiv2_step_rk8pd, 1e-6, 1e-14, 1e-14);
+  gsl_odeiv2_driver* d =
+      gsl_odeiv2_driver_alloc_y_new(&sys, gsl_odeiv2_step_rk8pd, 1e-6, 1e-14, 1e-14);
   double y[4] = {s.initial_positions()[2], s.initial_positions()[3], 0.0, 0.0};
   double t = 0.0;
   const int status = gsl_odeiv2_driver_apply(d, &t, t_end, y);

@@ -196,7 +196,8 @@ void Recorder::update_maxima(const Sample& s) {
   // With loads, a run may start from rest and unstressed (H_0 = 0): the
   // balance is then measured against the largest energy the run has held.
   if (has_loads_)
-    balance_scale_ = std::max({balance_scale_, energy_scale_, q.kinetic + std::abs(q.potential), std::abs(work)});
+    balance_scale_ = std::max(
+        {balance_scale_, energy_scale_, q.kinetic + std::abs(q.potential), std::abs(work)});
   const double scale = has_loads_ ? balance_scale_ : energy_scale_;
   keep_max(balance_error_max_, scale > 0 ? drift / scale : drift);
   if (!has_loads_) energy_error_max_ = balance_error_max_;
