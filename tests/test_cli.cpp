@@ -15,6 +15,7 @@
 
 #include "cli/scene.hpp"
 #include "integrators/stepper.hpp"
+#include "temp_dir.hpp"
 #include "verify/history.hpp"
 #include "verify/recorder.hpp"
 #include "verify/summary.hpp"
@@ -53,33 +54,7 @@ Result emdae(const std::string& args, const fs::path& cwd = fs::temp_directory_p
   return r;
 }
 
-class TempDir {
- public:
-  TempDir() {
-    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    // The process id keeps concurrent runs (two build trees) apart.
-    std::string name = std::string("emdae_cli_") + std::to_string(::getpid()) + "_" +
-                       info->test_suite_name() + "_" + info->name();
-    for (char& c : name)
-      if (c == '/') c = '_';
-    path_ = fs::temp_directory_path() / name;
-    fs::remove_all(path_);
-    fs::create_directories(path_);
-  }
-  ~TempDir() {
-    std::error_code ec;
-    fs::remove_all(path_, ec);
-  }
-  std::string write(const std::string& file, const std::string& content) const {
-    std::ofstream(path_ / file, std::ios::binary) << content;
-    return (path_ / file).string();
-  }
-  const fs::path& path() const { return path_; }
-  std::string operator/(const std::string& p) const { return (path_ / p).string(); }
-
- private:
-  fs::path path_;
-};
+using test_systems::TempDir;
 
 nlohmann::json read_json(const std::string& path) {
   std::ifstream in(path);

@@ -25,6 +25,7 @@
 #include "core/mesh.hpp"
 #include "core/system.hpp"
 #include "integrators/stepper.hpp"
+#include "temp_dir.hpp"
 #include "verify/vtu.hpp"
 
 namespace emdae {
@@ -67,29 +68,7 @@ Result emdae(const std::string& args, const std::string& env = "") {
   return shell(env + (env.empty() ? "" : " ") + quote(kExe) + " " + args);
 }
 
-class TempDir {
- public:
-  TempDir() {
-    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    // The process id keeps concurrent runs (two build trees) apart.
-    std::string name = std::string("emdae_report_") + std::to_string(::getpid()) + "_" +
-                       info->test_suite_name() + "_" + info->name();
-    for (char& c : name)
-      if (c == '/') c = '_';
-    path_ = fs::temp_directory_path() / name;
-    fs::remove_all(path_);
-    fs::create_directories(path_);
-  }
-  ~TempDir() {
-    std::error_code ec;
-    fs::remove_all(path_, ec);
-  }
-  const fs::path& path() const { return path_; }
-  std::string operator/(const std::string& p) const { return (path_ / p).string(); }
-
- private:
-  fs::path path_;
-};
+using test_systems::TempDir;
 
 std::string read_text(const fs::path& path) {
   std::ifstream in(path, std::ios::binary);

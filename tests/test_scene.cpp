@@ -13,6 +13,7 @@
 
 #include "cli/scene.hpp"
 #include "integrators/stepper.hpp"
+#include "temp_dir.hpp"
 #include "verify/recorder.hpp"
 
 namespace emdae {
@@ -20,34 +21,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-// A fresh folder per test, removed afterwards.
-class TempDir {
- public:
-  TempDir() {
-    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    // The process id keeps concurrent runs (two build trees) apart.
-    std::string name = std::string("emdae_scene_") + std::to_string(::getpid()) + "_" +
-                       info->test_suite_name() + "_" + info->name();
-    for (char& c : name)
-      if (c == '/') c = '_';
-    path_ = fs::temp_directory_path() / name;
-    fs::remove_all(path_);
-    fs::create_directories(path_);
-  }
-  ~TempDir() {
-    std::error_code ec;
-    fs::remove_all(path_, ec);
-  }
-  std::string write(const std::string& file, const std::string& content) const {
-    const fs::path p = path_ / file;
-    std::ofstream(p, std::ios::binary) << content;
-    return p.string();
-  }
-  const fs::path& path() const { return path_; }
-
- private:
-  fs::path path_;
-};
+using test_systems::TempDir;
 
 const std::string kTime = "[time]\ndt = 0.01\nt_end = 0.1\n\n";
 const std::string kParticles =

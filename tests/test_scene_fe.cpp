@@ -22,6 +22,7 @@
 #include "core/quantities.hpp"
 #include "integrators/driver.hpp"
 #include "integrators/stepper.hpp"
+#include "temp_dir.hpp"
 #include "verify/recorder.hpp"
 
 namespace emdae {
@@ -37,34 +38,7 @@ std::string quote(const std::string& s) {
   return "'" + s + "'";
 }
 
-// A fresh folder per test, removed afterwards.
-class TempDir {
- public:
-  TempDir() {
-    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    // The process id keeps concurrent runs (two build trees) apart.
-    std::string name = std::string("emdae_scene_fe_") + std::to_string(::getpid()) + "_" +
-                       info->test_suite_name() + "_" + info->name();
-    for (char& c : name)
-      if (c == '/') c = '_';
-    path_ = fs::temp_directory_path() / name;
-    fs::remove_all(path_);
-    fs::create_directories(path_);
-  }
-  ~TempDir() {
-    std::error_code ec;
-    fs::remove_all(path_, ec);
-  }
-  std::string write(const std::string& file, const std::string& content) const {
-    std::ofstream(path_ / file, std::ios::binary) << content;
-    return (path_ / file).string();
-  }
-  const fs::path& path() const { return path_; }
-  std::string operator/(const std::string& p) const { return (path_ / p).string(); }
-
- private:
-  fs::path path_;
-};
+using test_systems::TempDir;
 
 struct Result {
   int code = -1;
