@@ -1,10 +1,13 @@
-// A fresh folder per test, removed afterwards: named after the test and the
-// process, so that concurrent runs (two build trees, ctest -j) stay apart.
+// Helpers of the suites that run the emdae command: a fresh folder per test,
+// removed afterwards (named after the test and the process, so that
+// concurrent runs stay apart), and a shell command with its output.
 #pragma once
 
 #include <gtest/gtest.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <string>
@@ -41,5 +44,23 @@ class TempDir {
  private:
   std::filesystem::path path_;
 };
+
+struct CommandResult {
+  int code = -1;
+  std::string output;  // stdout and stderr together
+};
+
+/// Runs `cmd` through the shell, capturing stdout and stderr together.
+inline CommandResult shell(const std::string& cmd) {
+  CommandResult r;
+  FILE* pipe = ::popen((cmd + " 2>&1").c_str(), "r");
+  if (!pipe) return r;
+  char buffer[4096];
+  std::size_t n;
+  while ((n = std::fread(buffer, 1, sizeof buffer, pipe)) > 0) r.output.append(buffer, n);
+  const int status = ::pclose(pipe);
+  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  return r;
+}
 
 }  // namespace emdae::test_systems

@@ -35,23 +35,12 @@ std::string quote(const std::string& s) {
   return "'" + s + "'";
 }
 
-struct Result {
-  int code = -1;
-  std::string output;  // stdout and stderr together
-};
+using Result = test_systems::CommandResult;
 
 // Runs `args` through the shell from folder `cwd`.
 Result emdae(const std::string& args, const fs::path& cwd = fs::temp_directory_path()) {
-  const std::string cmd = "cd " + quote(cwd.string()) + " && " + quote(kExe) + " " + args + " 2>&1";
-  Result r;
-  FILE* pipe = ::popen(cmd.c_str(), "r");
-  if (!pipe) return r;
-  char buffer[4096];
-  std::size_t n;
-  while ((n = std::fread(buffer, 1, sizeof buffer, pipe)) > 0) r.output.append(buffer, n);
-  const int status = ::pclose(pipe);
-  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return r;
+  const std::string cmd = "cd " + quote(cwd.string()) + " && " + quote(kExe) + " " + args;
+  return test_systems::shell(cmd);
 }
 
 using test_systems::TempDir;

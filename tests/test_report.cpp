@@ -46,23 +46,9 @@ std::string quote(const std::string& s) {
   return out + "'";
 }
 
-struct Result {
-  int code = -1;
-  std::string output;  // stdout and stderr together
-};
+using Result = test_systems::CommandResult;
 
-// Runs a shell command, capturing stdout and stderr together.
-Result shell(const std::string& cmd) {
-  Result r;
-  FILE* pipe = ::popen((cmd + " 2>&1").c_str(), "r");
-  if (!pipe) return r;
-  char buffer[4096];
-  std::size_t n;
-  while ((n = std::fread(buffer, 1, sizeof buffer, pipe)) > 0) r.output.append(buffer, n);
-  const int status = ::pclose(pipe);
-  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return r;
-}
+using test_systems::shell;
 
 Result emdae(const std::string& args, const std::string& env = "") {
   return shell(env + (env.empty() ? "" : " ") + quote(kExe) + " " + args);

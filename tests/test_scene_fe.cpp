@@ -40,24 +40,12 @@ std::string quote(const std::string& s) {
 
 using test_systems::TempDir;
 
-struct Result {
-  int code = -1;
-  std::string output;  // stdout and stderr together
-};
+using Result = test_systems::CommandResult;
 
 // Runs the emdae executable with `args` through the shell from folder `cwd`.
 Result emdae(const std::string& args, const fs::path& cwd) {
-  const std::string cmd =
-      "cd " + quote(cwd.string()) + " && " + quote(EMDAE_EXE) + " " + args + " 2>&1";
-  Result r;
-  FILE* pipe = ::popen(cmd.c_str(), "r");
-  if (!pipe) return r;
-  char buffer[4096];
-  std::size_t n;
-  while ((n = std::fread(buffer, 1, sizeof buffer, pipe)) > 0) r.output.append(buffer, n);
-  const int status = ::pclose(pipe);
-  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return r;
+  const std::string cmd = "cd " + quote(cwd.string()) + " && " + quote(EMDAE_EXE) + " " + args;
+  return test_systems::shell(cmd);
 }
 
 nlohmann::json read_json(const std::string& path) {
