@@ -13,6 +13,7 @@
 
 #include "cli/scene.hpp"
 #include "integrators/stepper.hpp"
+#include "malformed_scene.hpp"
 #include "temp_dir.hpp"
 #include "verify/recorder.hpp"
 
@@ -44,18 +45,8 @@ std::string known_list() {
 }
 
 // 1-based line of the first line of `content` containing `marker`.
-int line_of(const std::string& content, const std::string& marker) {
-  const auto at = content.find(marker);
-  if (at == std::string::npos) return -1;
-  return 1 + static_cast<int>(std::count(content.begin(), content.begin() + at, '\n'));
-}
 
-struct Malformed {
-  std::string name;  // the file is <name>.toml
-  std::string content;
-  std::string marker;  // the message must point at the line holding this ("" : no line)
-  std::vector<std::string> expected;  // substrings of the message
-};
+using test_systems::Malformed;
 
 std::vector<Malformed> malformed_scenes() {
   const std::string p = kParticles;
@@ -233,32 +224,11 @@ std::vector<Malformed> malformed_scenes() {
   };
 }
 
-void PrintTo(const Malformed& c, std::ostream* os) {
-  *os << c.name;
-}
-
 class MalformedScene : public ::testing::TestWithParam<Malformed> {};
 
 TEST_P(MalformedScene, ErrorNamesFileLineKeyAndValue) {
-  const Malformed& c = GetParam();
   TempDir dir;
-  const std::string file = c.name + ".toml";
-  const std::string path = dir.write(file, c.content);
-  try {
-    load_scene(path);
-    FAIL() << c.name << ": no SceneError";
-  } catch (const SceneError& e) {
-    const std::string msg = e.what();
-    // The place: FILE:LINE (the whole file when it has no keys at all).
-    const int line = c.marker.empty() ? 1 : line_of(c.content, c.marker);
-    ASSERT_GT(line, 0) << "bad test: marker not in content";
-    EXPECT_NE(msg.find(path + ":" + std::to_string(line) + ":"), std::string::npos)
-        << "expected " << path << ":" << line << ": in\n  " << msg;
-    for (std::string want : c.expected) {
-      if (want.rfind("{path}", 0) == 0) want = path + want.substr(6);
-      EXPECT_NE(msg.find(want), std::string::npos) << "expected '" << want << "' in\n  " << msg;
-    }
-  }
+  test_systems::expect_located_scene_error(dir, GetParam());
 }
 
 INSTANTIATE_TEST_SUITE_P(Scenes, MalformedScene, ::testing::ValuesIn(malformed_scenes()),

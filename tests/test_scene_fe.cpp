@@ -22,6 +22,7 @@
 #include "core/quantities.hpp"
 #include "integrators/driver.hpp"
 #include "integrators/stepper.hpp"
+#include "malformed_scene.hpp"
 #include "temp_dir.hpp"
 #include "verify/recorder.hpp"
 
@@ -67,12 +68,7 @@ std::vector<std::string> split(const std::string& line) {
   return cells;
 }
 
-// 1-based line of the first line of `content` containing `marker`.
-int line_of(const std::string& content, const std::string& marker) {
-  const auto at = content.find(marker);
-  if (at == std::string::npos) return -1;
-  return 1 + static_cast<int>(std::count(content.begin(), content.begin() + at, '\n'));
-}
+using test_systems::line_of;
 
 // --- a small valid FE scene, and variations of it that must be refused -----------
 
@@ -92,16 +88,7 @@ const std::string kTorque =
     "[[loads]]\ntype = \"torque\"\non = \"a.inner\"\ntorque = 5.0\n"
     "time_function = { type = \"hat\", start = 0.0, end = 0.05 }\n\n";
 
-struct Malformed {
-  std::string name;
-  std::string content;
-  std::string marker;                 // the message points at the line holding it
-  std::vector<std::string> expected;  // substrings of the message
-};
-
-void PrintTo(const Malformed& c, std::ostream* os) {
-  *os << c.name;
-}
+using test_systems::Malformed;
 
 // `text` with the first `from` replaced by `to`.
 std::string with(std::string text, const std::string& from, const std::string& to) {
@@ -251,23 +238,8 @@ std::vector<Malformed> malformed_fe_scenes() {
 class MalformedFeScene : public ::testing::TestWithParam<Malformed> {};
 
 TEST_P(MalformedFeScene, ErrorNamesFileLineAndKey) {
-  const Malformed& c = GetParam();
   TempDir dir;
-  const std::string path = dir.write(c.name + ".toml", c.content);
-  try {
-    load_scene(path);
-    FAIL() << c.name << ": no SceneError";
-  } catch (const SceneError& e) {
-    const std::string msg = e.what();
-    const int line = c.marker.empty() ? 1 : line_of(c.content, c.marker);
-    ASSERT_GT(line, 0) << "bad test: marker not in content";
-    EXPECT_NE(msg.find(path + ":" + std::to_string(line) + ":"), std::string::npos)
-        << "expected " << path << ":" << line << ": in\n  " << msg;
-    for (std::string want : c.expected) {
-      if (want.rfind("{path}", 0) == 0) want = path + want.substr(6);
-      EXPECT_NE(msg.find(want), std::string::npos) << "expected '" << want << "' in\n  " << msg;
-    }
-  }
+  test_systems::expect_located_scene_error(dir, GetParam());
 }
 
 INSTANTIATE_TEST_SUITE_P(Scenes, MalformedFeScene, ::testing::ValuesIn(malformed_fe_scenes()),
