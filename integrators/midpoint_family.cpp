@@ -374,7 +374,10 @@ StepStats MidpointFamilyStepper::contact_substep(State& s, double dt) {
       double a = 0.0, fa = first_gap(s.q), b = dt, fb = first_gap(trial.q);
       int side = 0;
       for (int it = 0; it < 60; ++it) {
-        const double tau = (a * fb - b * fa) / (fb - fa);
+        // Bisection while a node is not yet engaged at the left end (its gap
+        // is +infinity there: a fast node that comes opposite the master
+        // surface within the step).
+        const double tau = std::isfinite(fa) ? (a * fb - b * fa) / (fb - fa) : 0.5 * (a + b);
         State sub = s;
         const StepStats rs = solve(sub, tau);
         accumulate(rs);
@@ -384,6 +387,18 @@ StepStats MidpointFamilyStepper::contact_substep(State& s, double dt) {
           return total;
         }
         const double fc = first_gap(sub.q);
+        // A node closed at t_n (released in this sub-step) that penetrates
+        // at tau as well re-enters for the whole sub-step, at no energy cost
+        // (both its gaps zero), and the sub-step is solved again.
+        for (int id = 0; id < system_.n_unilateral(); ++id)
+          if (std::find(s.active.begin(), s.active.end(), id) == s.active.end() &&
+              std::find(open.begin(), open.end(), id) == open.end() &&
+              system_.unilateral_gap(id, sub.q) < -gap_tol_) {
+            pinned.push_back(id);
+            activate(s, id);
+            reentered = true;
+          }
+        if (reentered) break;
         if (std::abs(fc) <= gap_tol_ || b - a <= 1e-14 * dt) {
           for (int id : open)
             if (system_.unilateral_gap(id, sub.q) <= gap_tol_) activate(sub, id);
@@ -404,6 +419,7 @@ StepStats MidpointFamilyStepper::contact_substep(State& s, double dt) {
           side = +1;
         }
       }
+      if (reentered) continue;
       total.converged = false;
       total.message = "impact location did not converge";
       return total;
@@ -433,6 +449,11 @@ StepStats MidpointFamilyStepper::step(State& state, double dt) {
     total.iterations += r.iterations;
     total.residual = std::max(total.residual, r.residual);
     total.contact_events += r.contact_events;
+    total.message = r.message;
+    if (!r.converged) {  // a failed sub-step has no work or impulses
+      total.converged = false;
+      return total;
+    }
     total.external_work += r.external_work;
     if (total.external_impulse.size() == 0) {
       total.external_impulse = r.external_impulse;
@@ -440,11 +461,6 @@ StepStats MidpointFamilyStepper::step(State& state, double dt) {
     } else {
       total.external_impulse += r.external_impulse;
       total.external_angular_impulse += r.external_angular_impulse;
-    }
-    total.message = r.message;
-    if (!r.converged) {
-      total.converged = false;
-      return total;
     }
   }
   s.t = t_end;  // sub-steps add up to dt up to round-off

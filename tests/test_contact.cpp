@@ -191,5 +191,47 @@ TEST(RingImpact, WithoutImpactLocationEnergyIsLostAtEachImpact) {
   EXPECT_LE(off.ang_err, 1e-10);
 }
 
+// Hard cases, each against the same figures as the paper-like run above:
+// a high-velocity impact (closing speed 60 instead of 20), a large step
+// (dt 0.05: a node closes 1 of the ring's 2 thickness per step), a stiff
+// material (E 100 times larger: the contact lasts 10 times shorter), and
+// all three at once. The energy treatment locates every impact, so energy
+// and momenta hold to the same tolerances; Newton and location work grows.
+struct HardCase {
+  const char* name;
+  double speed, dt, young, t_end;  // t_end: through the impact and the separation
+};
+
+class RingImpactHard : public ::testing::TestWithParam<HardCase> {};
+
+TEST_P(RingImpactHard, EnergyMomentumConservesThroughImpact) {
+  const HardCase c = GetParam();
+  const RingImpact scene = ring_impact(0.5, c.speed, 4.0, 32, 2, 8.0, 10.0, c.young);
+  const double t_end = c.t_end;
+  const ImpactFigures f = run_impact(scene, "em", c.dt, t_end, true);
+  ASSERT_TRUE(f.ok) << f.message;
+  std::printf(
+      "%s: energy %.2e linear %.2e angular %.2e active gap %.2e min inactive gap %.2e max "
+      "active %d contact [%.4f, %.4f]\n",
+      c.name, f.energy_err, f.lin_err, f.ang_err, f.active_gap, f.min_inactive_gap, f.max_active,
+      f.first_contact, f.last_contact);
+  EXPECT_GE(f.max_active, 1);                   // they touched
+  EXPECT_LT(f.last_contact, t_end - 2 * c.dt);  // and separated again
+  EXPECT_LE(f.energy_err, 1e-8);
+  EXPECT_LE(f.lin_err, 1e-10);
+  EXPECT_LE(f.ang_err, 1e-10);
+  EXPECT_LE(f.active_gap, 1e-10);
+  EXPECT_GE(f.min_inactive_gap, -1e-10);
+}
+
+INSTANTIATE_TEST_SUITE_P(Cases, RingImpactHard,
+                         ::testing::Values(HardCase{"high_velocity", 30.0, 0.01, 100.0, 1.5},
+                                           HardCase{"large_step", 10.0, 0.05, 100.0, 1.5},
+                                           HardCase{"stiff", 10.0, 0.01, 1e4, 0.3},
+                                           HardCase{"all_three", 50.0, 0.05, 1e4, 0.3}),
+                         [](const ::testing::TestParamInfo<HardCase>& p) {
+                           return std::string(p.param.name);
+                         });
+
 }  // namespace
 }  // namespace emdae
