@@ -153,10 +153,10 @@ struct Kkt {
   std::vector<Mat> hessians;
 };
 
-void assemble_kkt(const System& s, const Assembler& assembler, TermWorkspace& ws, const Vec& q,
-                  double t, Kkt& out) {
+void assemble_kkt(const System& s, const std::vector<const Term*>& cons, const Assembler& assembler,
+                  TermWorkspace& ws, const Vec& q, double t, Kkt& out) {
   const int n = s.n_dofs();
-  const int m = s.n_constraints();
+  const int m = static_cast<int>(cons.size());
   const auto& fixed = s.is_prescribed();
   Triplets trip;
   assembler.add_mass(trip, 1.0);
@@ -166,7 +166,7 @@ void assemble_kkt(const System& s, const Assembler& assembler, TermWorkspace& ws
   Vec ql;
   for (int l = 0; l < m; ++l) {
     const auto k = static_cast<std::size_t>(l);
-    const Term& c = *s.constraints()[k];
+    const Term& c = *cons[k];
     gather(c, q, ql);
     term_gradient(c, GradientKind::Exact, ql, ql, t, t, out.grads[k], &out.hessians[k], ws);
     const auto& dofs = c.dofs();
@@ -193,14 +193,18 @@ void factorize(KktLu& lu, const SparseMatrix& k, double t) {
 
 }  // namespace
 
-ConsistentStart consistent_start(const System& s, double t, const Vec& q, const Vec& v) {
+ConsistentStart consistent_start(const System& s, double t, const Vec& q, const Vec& v,
+                                 const std::vector<const Term*>& extra) {
   const int n = s.n_dofs();
-  const int m = s.n_constraints();
+  std::vector<const Term*> cons;
+  for (const auto& c : s.constraints()) cons.push_back(c.get());
+  cons.insert(cons.end(), extra.begin(), extra.end());
+  const int m = static_cast<int>(cons.size());
   if (q.size() != n || v.size() != n)
     throw std::invalid_argument("consistent_start: q and v need " + std::to_string(n) +
                                 " entries, received " + std::to_string(q.size()) + " and " +
                                 std::to_string(v.size()));
-  Assembler assembler(s);
+  Assembler assembler(s, extra);
   TermWorkspace ws;
   Kkt kkt;
   KktLu lu;
@@ -229,11 +233,11 @@ ConsistentStart consistent_start(const System& s, double t, const Vec& q, const 
                                std::to_string(t) + " (residual " + std::to_string(res) + ")");
     }
     phi_max = res;
-    assemble_kkt(s, assembler, ws, out.q, t, kkt);
+    assemble_kkt(s, cons, assembler, ws, out.q, t, kkt);
     factorize(lu, kkt.k, t);
     out.q += Vec(lu.solve(rhs)).head(n);
   }
-  assemble_kkt(s, assembler, ws, out.q, t, kkt);
+  assemble_kkt(s, cons, assembler, ws, out.q, t, kkt);
   factorize(lu, kkt.k, t);
 
   // 2. Velocities: M dv + G^T kappa = 0, G dv = -(G v + Phi_t); prescribed
@@ -244,22 +248,28 @@ ConsistentStart consistent_start(const System& s, double t, const Vec& q, const 
   for (const auto& p : s.prescribed()) rhs[p.dof] = prescribed_velocity(p, t) - v[p.dof];
   for (int l = 0; l < m; ++l) {
     const auto k = static_cast<std::size_t>(l);
-    const Term& c = *s.constraints()[k];
+    const Term& c = *cons[k];
     gather(c, out.q, ql);
     gather(c, v, vl);
     if (c.depends_on_time()) constraint_gradient_rate(c, ql, t, gts[k], ws);
     rhs[n + l] = -(kkt.grads[k].dot(vl) + (c.depends_on_time() ? constraint_rate(c, ql, t) : 0.0));
   }
-  out.v = v + Vec(lu.solve(rhs)).head(n);
+  {
+    const Vec x = lu.solve(rhs);
+    out.v = v + x.head(n);
+    out.impulse = x.tail(m);
+  }
 
   // 3. Accelerations and multipliers with those velocities.
   Vec force = Vec::Zero(n);
   assembler.add_potential_forces(GradientKind::Exact, out.q, out.q, t, t, force, nullptr);
-  rhs.head(n) = -force;
+  Vec load = Vec::Zero(n);
+  if (!s.loads().empty()) s.add_load_forces(out.q, t, load);
+  rhs.head(n) = load - force;
   for (const auto& p : s.prescribed()) rhs[p.dof] = prescribed_acceleration(p, t);
   for (int l = 0; l < m; ++l) {
     const auto k = static_cast<std::size_t>(l);
-    const Term& c = *s.constraints()[k];
+    const Term& c = *cons[k];
     gather(c, out.q, ql);
     gather(c, out.v, vl);
     double r = vl.dot(kkt.hessians[k] * vl);
@@ -277,25 +287,42 @@ ConsistentStart consistent_start(const System& s, double t, const Vec& q, const 
 
 // --- the IDA driver ---------------------------------------------------------
 
+namespace {
+// Root function of a candidate that is not engaged (gap +infinity): a large
+// finite value of the same sign, which never makes a root.
+constexpr double kFarGap = 1e30;
+}  // namespace
+
 struct IdaStepper::Impl {
   Impl(const System& system, IdaSettings settings)
       : s(system),
         set(settings),
         n(system.n_dofs()),
-        m(system.n_constraints()),
-        size(2 * n + 2 * m),
-        assembler(system) {}
+        m_sys(system.n_constraints()),
+        n_cand(system.n_unilateral()),
+        gap_tol(settings.gap_tolerance > 0 ? settings.gap_tolerance : 10 * settings.atol),
+        assembler(system),
+        disarmed(static_cast<std::size_t>(system.n_unilateral()), 0) {}
 
   const System& s;
   IdaSettings set;
-  const int n, m, size;
-  Assembler assembler;
+  const int n, m_sys, n_cand;
+  int m = 0, size = 0;  // constraints (the system's, then the active contacts), unknowns
+  double gap_tol;
+  Assembler assembler;  // potentials and mass only
   TermWorkspace ws;
+
+  // Contact: the active candidates in the order of their multipliers, their
+  // terms for the prepared step, and the candidates whose gap root is moved
+  // to gap = -gap_tol (see the header: chattering guard).
+  std::vector<int> active;
+  std::vector<const Term*> extra;
+  std::vector<char> disarmed;
 
   // Declared in creation order: destroyed in reverse, IDA memory first and
   // the context last.
   ContextPtr ctx;
-  VectorPtr yy, yp, id;
+  VectorPtr yy, yp, id, yq, ypq;
   MatrixPtr jmat;
   SolverPtr ls;
   IdaPtr mem;
@@ -304,14 +331,23 @@ struct IdaStepper::Impl {
   // The state handed out last; anything else is a state changed from outside.
   double t_out = 0.0;
   Vec q_out, v_out;
+  std::vector<int> active_out;
   Vec q_start;  // positions of prescribed dofs without g(t) stay at these
+
+  // A root returned by IDA and not yet acted upon (it may lie beyond the
+  // output time of the call that found it: then it is handled at the start
+  // of the next call, which continues from it).
+  bool pending = false;
+  double t_root = 0.0;
+  Vec y_root;
+  std::vector<int> roots_found;
 
   // Callback state: exceptions are parked here and rethrown after IDASolve.
   std::exception_ptr error;
   std::string last_message;
 
   // Scratch.
-  Vec q, v, f, ql, vl, grad, gt;
+  Vec q, v, f, load, ql, vl, grad, gt, rq;
   Mat hess;
   Triplets trip, tmp;
   SparseMatrix jac;
@@ -320,12 +356,31 @@ struct IdaStepper::Impl {
   // Counters of earlier IDA lives (IDAReInit resets IDA's own).
   long n_inits = 0, steps_before = 0, jacs_before = 0, iters_before = 0;
 
-  const Term& constraint(int l) const { return *s.constraints()[static_cast<std::size_t>(l)]; }
+  const Term& constraint(int l) const {
+    return l < m_sys ? *s.constraints()[static_cast<std::size_t>(l)]
+                     : *extra[static_cast<std::size_t>(l - m_sys)];
+  }
   bool free_dof(int i) const { return !s.is_prescribed()[static_cast<std::size_t>(i)]; }
+  bool is_active(int cand) const {
+    return std::find(active.begin(), active.end(), cand) != active.end();
+  }
+  bool engaged(int cand, const Vec& x) const {
+    return s.unilateral_term(cand) != nullptr && std::isfinite(s.unilateral_gap(cand, x));
+  }
+  void refresh_terms() {
+    extra.clear();
+    for (int cand : active) {
+      const Term* t = s.unilateral_term(cand);
+      if (!t) throw std::logic_error("IdaStepper: active candidate without a function");
+      extra.push_back(t);
+    }
+  }
 
-  // F(t, y, y') of the header's GGL system.
-  void residual(double t, const Eigen::Map<Vec>& y, const Eigen::Map<Vec>& ydot,
-                Eigen::Map<Vec> r) {
+  // F(t, y, y') of the header's GGL system. With prescribed_rows = false the
+  // velocity rows of prescribed dofs keep M v' + grad V + G^T lambda - f (the
+  // support reaction) instead of v - g'.
+  void residual(double t, const Eigen::Map<Vec>& y, const Eigen::Map<Vec>& ydot, Eigen::Map<Vec> r,
+                bool prescribed_rows = true) {
     q = y.segment(0, n);
     v = y.segment(n, n);
     const auto lambda = y.segment(2 * n, m);
@@ -333,6 +388,11 @@ struct IdaStepper::Impl {
     r.segment(0, n) = ydot.segment(0, n) - v;
     f = s.mass() * ydot.segment(n, n);
     assembler.add_potential_forces(GradientKind::Exact, q, q, t, t, f, nullptr);
+    if (!s.loads().empty()) {
+      load.setZero(n);
+      s.add_load_forces(q, t, load);
+      f -= load;
+    }
     r.segment(n, n) = f;
     for (int l = 0; l < m; ++l) {
       const Term& c = constraint(l);
@@ -350,12 +410,14 @@ struct IdaStepper::Impl {
     }
     for (const auto& p : s.prescribed()) {
       r[p.dof] = q[p.dof] - prescribed_position(p, t, q_start[p.dof]);
-      r[n + p.dof] = v[p.dof] - prescribed_velocity(p, t);
+      if (prescribed_rows) r[n + p.dof] = v[p.dof] - prescribed_velocity(p, t);
     }
   }
 
   // J = dF/dy + cj dF/dy'. Every entry is emitted whatever its value, so the
-  // pattern is the same at every call and KLU refactors numerically only.
+  // pattern is the same at every call and KLU refactors numerically only
+  // (it changes with the active set, the contact search and a load whose
+  // derivative vanishes: hand_to_klu then has KLU analyse it anew).
   void jacobian(double t, double cj, const Eigen::Map<Vec>& y) {
     q = y.segment(0, n);
     v = y.segment(n, n);
@@ -375,6 +437,7 @@ struct IdaStepper::Impl {
     tmp.clear();
     f.setZero(n);
     assembler.add_potential_forces(GradientKind::Exact, q, q, t, t, f, &tmp);
+    if (!s.loads().empty()) s.add_load_forces(q, t, f, &tmp, -1.0);  // -df/dq, free rows
     for (const auto& e : tmp) trip.emplace_back(n + e.row(), e.col(), e.value());
     for (int l = 0; l < m; ++l) {
       const Term& c = constraint(l);
@@ -411,12 +474,12 @@ struct IdaStepper::Impl {
     const long nnz = jac.nonZeros();
     const long* op = jac.outerIndexPtr();
     const long* ip = jac.innerIndexPtr();
-    const bool same_pattern = static_cast<long>(inner.size()) == nnz &&
-                              std::equal(op, op + size + 1, outer.begin()) &&
-                              std::equal(ip, ip + nnz, inner.begin());
+    const bool same_pattern =
+        static_cast<long>(inner.size()) == nnz && static_cast<long>(outer.size()) == size + 1 &&
+        std::equal(op, op + size + 1, outer.begin()) && std::equal(ip, ip + nnz, inner.begin());
     if (!same_pattern) {
-      // Only on the first call: the pattern is fixed by construction. Should
-      // it ever change, KLU is told to analyse the new pattern.
+      // On the first call of a solver, and when the pattern changed (see
+      // jacobian()): KLU is told to analyse the new pattern.
       if (SUNSparseMatrix_NNZ(a) < nnz)
         check(SUNSparseMatrix_Reallocate(a, nnz), "SUNSparseMatrix_Reallocate");
       if (!outer.empty())
@@ -428,6 +491,22 @@ struct IdaStepper::Impl {
     std::copy(op, op + size + 1, SUNSparseMatrix_IndexPointers(a));
     std::copy(ip, ip + nnz, SUNSparseMatrix_IndexValues(a));
     std::copy(jac.valuePtr(), jac.valuePtr() + nnz, SUNSparseMatrix_Data(a));
+  }
+
+  // Root functions, one per candidate: -lambda_k for an active one (a
+  // release when lambda turns tensile), its gap for an inactive one (an
+  // impact), gap + gap_tol while it is disarmed; all with direction -1.
+  void roots(double, const Eigen::Map<Vec>& y, realtype* g) {
+    q = y.segment(0, n);
+    for (int cand = 0; cand < n_cand; ++cand) g[cand] = kFarGap;
+    for (std::size_t k = 0; k < active.size(); ++k)
+      g[active[k]] = -y[2 * n + m_sys + static_cast<Eigen::Index>(k)];
+    for (int cand = 0; cand < n_cand; ++cand) {
+      if (is_active(cand)) continue;
+      const double gap = s.unilateral_gap(cand, q);
+      if (std::isfinite(gap) && gap < kFarGap)
+        g[cand] = gap + (disarmed[static_cast<std::size_t>(cand)] ? gap_tol : 0.0);
+    }
   }
 
   static int residual_cb(realtype t, N_Vector y, N_Vector ydot, N_Vector r, void* data) {
@@ -455,6 +534,17 @@ struct IdaStepper::Impl {
     }
   }
 
+  static int root_cb(realtype t, N_Vector y, N_Vector, realtype* g, void* data) {
+    auto* self = static_cast<Impl*>(data);
+    try {
+      self->roots(t, view(y), g);
+      return 0;
+    } catch (...) {
+      self->error = std::current_exception();
+      return -1;  // IDA returns IDA_RTFUNC_FAIL
+    }
+  }
+
   static void error_cb(int, const char* module, const char* function, char* msg, void* data) {
     auto* self = static_cast<Impl*>(data);
     self->last_message = std::string(module) + "::" + function + ": " + msg;
@@ -470,29 +560,44 @@ struct IdaStepper::Impl {
   long iters() const {
     return iters_before + counter(IDAGetNumNonlinSolvIters, "IDAGetNumNonlinSolvIters");
   }
+  // Before IDA's counters are reset (IDAReInit) or its memory freed.
+  void retire_counters() {
+    steps_before = steps();
+    jacs_before = jacs();
+    iters_before = iters();
+  }
 
-  void create() {
+  void create_context() {
     SUNContext c = nullptr;
     check(SUNContext_Create(nullptr, &c), "SUNContext_Create");
     ctx.reset(c);
-    yy.reset(check_ptr(N_VNew_Serial(size, ctx.get()), "N_VNew_Serial"));
-    yp.reset(check_ptr(N_VNew_Serial(size, ctx.get()), "N_VNew_Serial"));
-    id.reset(check_ptr(N_VNew_Serial(size, ctx.get()), "N_VNew_Serial"));
+  }
+
+  // (Re)allocates everything whose size is that of the DAE (2n + 2m) for the
+  // current active set; y0 = (q, v, lambda, mu) gives the Jacobian's pattern.
+  void allocate(double t, const Vec& y0) {
+    if (mem) retire_counters();
+    mem.reset();
+    ls.reset();
+    jmat.reset();
+    m = m_sys + static_cast<int>(active.size());
+    size = 2 * n + 2 * m;
+    for (VectorPtr* p : {&yy, &yp, &id, &yq, &ypq})
+      p->reset(check_ptr(N_VNew_Serial(size, ctx.get()), "N_VNew_Serial"));
     // Differential: free q and v. Algebraic (no error test): lambda, mu and
     // the prescribed q_i, v_i.
     auto ids = view(id.get());
     ids.setZero();
     for (int i = 0; i < n; ++i)
       if (free_dof(i)) ids[i] = ids[n + i] = 1.0;
-
-    // The pattern, and so the size of the sparse matrix, from one evaluation.
-    view(yy.get()).setZero();
-    view(yy.get()).head(n) = s.initial_positions();
-    jacobian(0.0, 1.0, view(yy.get()));
+    view(yy.get()) = y0;
+    jacobian(t, 1.0, view(yy.get()));
     jmat.reset(check_ptr(
         SUNSparseMatrix(size, size, std::max<long>(1, jac.nonZeros()), CSC_MAT, ctx.get()),
         "SUNSparseMatrix"));
     ls.reset(check_ptr(SUNLinSol_KLU(yy.get(), jmat.get(), ctx.get()), "SUNLinSol_KLU"));
+    outer.clear();
+    inner.clear();
   }
 
   // IDA's own first step makes ||h0 y'||_WRMS = 1/2, which at tight
@@ -508,50 +613,194 @@ struct IdaStepper::Impl {
     return r > 0 ? std::min(interval, 1.0 / std::sqrt(r)) : 0.0;  // 0: IDA's own
   }
 
-  void start(const State& st, double interval) {
-    const ConsistentStart c = consistent_start(s, st.t, st.q, st.v);
+  // Consistent values for the active set, settled in two phases.
+  //  1. Impact: the velocity projection at (q0, v0) is the impulse of the
+  //     entering candidates (perfectly inelastic); one whose impulse is
+  //     tensile (it was not approaching: the projection would pull it back)
+  //     is dropped, most tensile first, and the projection redone.
+  //  2. Forces: from the projected (q, v), an active candidate whose
+  //     multiplier is tensile is released, most tensile first; its normal
+  //     velocity is zero already, so the remaining projection changes
+  //     nothing and it separates by its acceleration.
+  // Returns the number of candidates released that were active before.
+  int settle(double t, const Vec& q0, const Vec& v0, std::vector<int> entering,
+             ConsistentStart& c) {
+    int releases = 0;
+    const int limit = 2 * n_cand + 4;
+    auto drop = [&](std::size_t k) {
+      const int cand = active[k];
+      if (std::find(entering.begin(), entering.end(), cand) == entering.end()) ++releases;
+      entering.erase(std::remove(entering.begin(), entering.end(), cand), entering.end());
+      active.erase(active.begin() + static_cast<std::ptrdiff_t>(k));
+    };
+    for (int it = 0;; ++it) {  // 1. impact
+      if (it > limit) throw std::runtime_error("IdaStepper: impact set did not settle");
+      refresh_terms();
+      c = consistent_start(s, t, q0, v0, extra);
+      std::size_t worst = active.size();
+      double worst_value = 0.0;
+      for (std::size_t k = 0; k < active.size(); ++k) {
+        const double kappa = c.impulse[m_sys + static_cast<Eigen::Index>(k)];
+        if (kappa > worst_value &&
+            std::find(entering.begin(), entering.end(), active[k]) != entering.end())
+          worst = k, worst_value = kappa;
+      }
+      if (worst == active.size()) break;
+      drop(worst);
+    }
+    const Vec q1 = c.q, v1 = c.v;
+    for (int it = 0;; ++it) {  // 2. forces
+      if (it > limit) throw std::runtime_error("IdaStepper: active set did not settle");
+      std::size_t worst = active.size();
+      double worst_value = 0.0;
+      for (std::size_t k = 0; k < active.size(); ++k) {
+        const double lambda = c.lambda[m_sys + static_cast<Eigen::Index>(k)];
+        if (lambda > worst_value) worst = k, worst_value = lambda;
+      }
+      if (worst == active.size()) return releases;
+      drop(worst);
+      refresh_terms();
+      c = consistent_start(s, t, q1, v1, extra);
+    }
+  }
+
+  // (Re)starts IDA at (t, q, v) with the current active set (`entering`: the
+  // candidates just added), projecting and settling it first; returns the
+  // releases made while settling.
+  int restart(double t, const Vec& q0, const Vec& v0, const std::vector<int>& entering,
+              double interval) {
+    ConsistentStart c;
+    const int releases = settle(t, q0, v0, entering, c);
+    const int m_new = m_sys + static_cast<int>(active.size());
+    // Candidates that are closed but not active get their root at -gap_tol.
+    for (int cand = 0; cand < n_cand; ++cand)
+      disarmed[static_cast<std::size_t>(cand)] =
+          !is_active(cand) && s.unilateral_gap(cand, c.q) <= gap_tol;
     q_start = c.q;
-    auto y = view(yy.get());
-    auto ydot = view(yp.get());
-    y << c.q, c.v, c.lambda, Vec::Zero(m);
-    ydot << c.v, c.a, Vec::Zero(m), Vec::Zero(m);
-    if (!mem) {
+    Vec y0(2 * n + 2 * m_new), yd0(2 * n + 2 * m_new);
+    y0 << c.q, c.v, c.lambda, Vec::Zero(m_new);
+    yd0 << c.v, c.a, Vec::Zero(m_new), Vec::Zero(m_new);
+    const bool fresh = !mem || m_new != m;
+    if (fresh) allocate(t, y0);
+    view(yy.get()) = y0;
+    view(yp.get()) = yd0;
+    if (fresh) {
       mem.reset(check_ptr(IDACreate(ctx.get()), "IDACreate"));
       void* p = mem.get();
       check_ida(IDASetErrHandlerFn(p, &Impl::error_cb, this), "IDASetErrHandlerFn");
-      check_ida(IDAInit(p, &Impl::residual_cb, st.t, yy.get(), yp.get()), "IDAInit");
+      check_ida(IDAInit(p, &Impl::residual_cb, t, yy.get(), yp.get()), "IDAInit");
       check_ida(IDASStolerances(p, set.rtol, set.atol), "IDASStolerances");
       check_ida(IDASetUserData(p, this), "IDASetUserData");
       check_ida(IDASetId(p, id.get()), "IDASetId");
       check_ida(IDASetSuppressAlg(p, SUNTRUE), "IDASetSuppressAlg");
       check_ida(IDASetMaxOrd(p, set.max_order), "IDASetMaxOrd");
+      // One internal step per IDASolve call (IDA_ONE_STEP): the budget of
+      // step() is counted there.
       check_ida(IDASetMaxNumSteps(p, set.max_steps), "IDASetMaxNumSteps");
       check_ls(IDASetLinearSolver(p, ls.get(), jmat.get()), "IDASetLinearSolver");
       check_ls(IDASetJacFn(p, &Impl::jacobian_cb), "IDASetJacFn");
+      if (n_cand > 0) {
+        check_ida(IDARootInit(p, n_cand, &Impl::root_cb), "IDARootInit");
+        std::vector<int> dir(static_cast<std::size_t>(n_cand), -1);
+        check_ida(IDASetRootDirection(p, dir.data()), "IDASetRootDirection");
+        check_ida(IDASetNoInactiveRootWarn(p), "IDASetNoInactiveRootWarn");
+      }
     } else {
-      steps_before = steps();
-      jacs_before = jacs();
-      iters_before = iters();
-      check_ida(IDAReInit(mem.get(), st.t, yy.get(), yp.get()), "IDAReInit");
+      retire_counters();
+      check_ida(IDAReInit(mem.get(), t, yy.get(), yp.get()), "IDAReInit");
     }
     check_ida(IDASetInitStep(mem.get(), initial_step(c, interval)), "IDASetInitStep");
     ++n_inits;
     need_restart = false;
+    pending = false;
+    return releases;
   }
 
   bool continues(const State& st) const {
-    return !need_restart && st.t == t_out && same(st.q, q_out) && same(st.v, v_out);
+    return !need_restart && st.t == t_out && same(st.q, q_out) && same(st.v, v_out) &&
+           st.active == active_out;
+  }
+
+  // --- quadratures of the loads over the step -----------------------------
+  // Simpson's rule on each piece [a, b] of IDA's internal steps (the dense
+  // output of the step that covers it at a, (a + b)/2, b): the work of the
+  // loads int f . v dt, and the impulse of the loads and supports int (f + R)
+  // dt with its moment int x x (f + R) dt (R = M v' + grad V + G^T lambda - f
+  // on the prescribed rows: the support reaction).
+  bool has_quadrature() const { return !s.loads().empty() || !s.prescribed().empty(); }
+
+  void quadrature_point(double t, double& power, Vec& impulse, Vec& angular) {
+    check_ida(IDAGetDky(mem.get(), t, 0, yq.get()), "IDAGetDky");
+    check_ida(IDAGetDky(mem.get(), t, 1, ypq.get()), "IDAGetDky");
+    const auto y = view(yq.get());
+    const Vec x = y.head(n), u = y.segment(n, n);
+    Vec density = Vec::Zero(n);
+    if (!s.loads().empty()) s.add_load_forces(x, t, density);
+    power = density.dot(u);
+    if (!s.prescribed().empty()) {
+      rq.resize(size);
+      residual(t, y, view(ypq.get()), Eigen::Map<Vec>(rq.data(), size), false);
+      for (const auto& p : s.prescribed()) density[p.dof] += rq[n + p.dof];
+    }
+    const int dim = s.dim();
+    impulse = Vec::Zero(dim);
+    angular = Vec::Zero(dim == 2 ? 1 : 3);
+    for (int a = 0; a < s.n_nodes(); ++a) {
+      const auto i = density.segment(a * dim, dim);
+      const auto r = x.segment(a * dim, dim);
+      impulse += i;
+      if (dim == 2) {
+        angular[0] += r[0] * i[1] - r[1] * i[0];
+      } else {
+        angular += Eigen::Vector3d(r[0], r[1], r[2]).cross(Eigen::Vector3d(i[0], i[1], i[2]));
+      }
+    }
+  }
+
+  void integrate_loads(double a, double b, StepStats& stats) {
+    if (!has_quadrature() || !(b > a)) return;
+    double p[3];
+    Vec imp[3], ang[3];
+    const double ts[3] = {a, 0.5 * (a + b), b};
+    for (int k = 0; k < 3; ++k) quadrature_point(ts[k], p[k], imp[k], ang[k]);
+    const double w = (b - a) / 6;
+    stats.external_work += w * (p[0] + 4 * p[1] + p[2]);
+    stats.external_impulse += w * (imp[0] + 4 * imp[1] + imp[2]);
+    stats.external_angular_impulse += w * (ang[0] + 4 * ang[1] + ang[2]);
+  }
+
+  // --- contact events -----------------------------------------------------
+  // The root returned at t_root: releases and impacts, then a constrained
+  // restart there. Returns the number of events.
+  int handle_root(double interval) {
+    const Vec q0 = y_root.head(n), v0 = y_root.segment(n, n);
+    std::vector<int> entering, released;
+    for (int cand = 0; cand < n_cand; ++cand)
+      if (roots_found[static_cast<std::size_t>(cand)] != 0) {
+        if (is_active(cand)) {
+          released.push_back(cand);
+        } else if (engaged(cand, q0)) {
+          entering.push_back(cand);
+        }
+      }
+    for (int cand : released) active.erase(std::find(active.begin(), active.end(), cand));
+    // Others closed at the same instant (within the root's time tolerance).
+    for (int cand = 0; cand < n_cand; ++cand)
+      if (!is_active(cand) && std::find(released.begin(), released.end(), cand) == released.end() &&
+          std::find(entering.begin(), entering.end(), cand) == entering.end() &&
+          engaged(cand, q0) && s.unilateral_gap(cand, q0) < 0.0)
+        entering.push_back(cand);
+    active.insert(active.end(), entering.begin(), entering.end());
+    const int releases = restart(t_root, q0, v0, entering, interval);
+    int kept = 0;
+    for (int cand : entering) kept += is_active(cand) ? 1 : 0;
+    return static_cast<int>(released.size()) + releases + kept;
   }
 };
 
 IdaStepper::IdaStepper(const System& system, IdaSettings settings)
     : impl_(std::make_unique<Impl>(system, settings)) {
   system.validate();
-  if (system.n_unilateral() > 0)
-    throw std::invalid_argument(
-        "IdaStepper: contact (unilateral constraints) is not supported; "
-        "the system has " +
-        std::to_string(system.n_unilateral()) + " candidates");
   if (!(settings.rtol > 0) || !(settings.atol > 0))
     throw std::invalid_argument("IdaStepper: tolerances must be positive, received rtol = " +
                                 std::to_string(settings.rtol) +
@@ -562,7 +811,10 @@ IdaStepper::IdaStepper(const System& system, IdaSettings settings)
   if (settings.max_steps < 1)
     throw std::invalid_argument("IdaStepper: max_steps must be >= 1, received " +
                                 std::to_string(settings.max_steps));
-  impl_->create();
+  if (settings.gap_tolerance < 0)
+    throw std::invalid_argument("IdaStepper: gap_tolerance must be >= 0, received " +
+                                std::to_string(settings.gap_tolerance));
+  impl_->create_context();
 }
 
 IdaStepper::~IdaStepper() = default;
@@ -571,6 +823,9 @@ IdaStepper& IdaStepper::operator=(IdaStepper&&) noexcept = default;
 
 const IdaSettings& IdaStepper::settings() const {
   return impl_->set;
+}
+double IdaStepper::gap_tolerance() const {
+  return impl_->gap_tol;
 }
 long IdaStepper::n_initializations() const {
   return impl_->n_inits;
@@ -593,41 +848,135 @@ StepStats IdaStepper::step(State& state, double dt) {
   if (state.q.size() != m.n || state.v.size() != m.n)
     throw std::invalid_argument("IdaStepper::step: state has " + std::to_string(state.q.size()) +
                                 " positions for a system of " + std::to_string(m.n) + " dofs");
-  if (!m.continues(state)) m.start(state, dt);
-
-  const long iters0 = m.iters();
+  const int dim = m.s.dim();
+  StepStats stats;
+  stats.external_impulse = Vec::Zero(dim);
+  stats.external_angular_impulse = Vec::Zero(dim == 2 ? 1 : 3);
   m.error = nullptr;
   m.last_message.clear();
+  const long iters0 = m.iters();
   const double tout = state.t + dt;
-  realtype tret = state.t;
-  const int flag = IDASolve(m.mem.get(), tout, &tret, m.yy.get(), m.yp.get(), IDA_NORMAL);
-  if (m.error) {
+  int flag = IDA_SUCCESS;
+  try {
+    // Contact search for the step; the active candidates' functions follow.
+    for (const auto& set : m.s.unilateral()) set->prepare(state.q, state.v, dt);
+    bool restart = !m.continues(state);
+    if (restart) m.active = state.active;
+    // Active candidates no longer engaged leave; inactive ones found
+    // penetrating (engaged only now) enter with an inelastic impact.
+    std::vector<int> entering;
+    for (std::size_t k = m.active.size(); k-- > 0;)
+      if (!m.engaged(m.active[k], state.q)) {
+        m.active.erase(m.active.begin() + static_cast<std::ptrdiff_t>(k));
+        restart = true;
+        ++stats.contact_events;
+      }
+    for (int cand = 0; cand < m.n_cand; ++cand) {
+      if (m.is_active(cand) || !m.engaged(cand, state.q)) continue;
+      const double gap = m.s.unilateral_gap(cand, state.q);
+      if (gap < -m.gap_tol) {
+        entering.push_back(cand);
+        restart = true;
+      } else if (gap > m.gap_tol) {
+        m.disarmed[static_cast<std::size_t>(cand)] = 0;  // both root values positive: no root
+      }
+    }
+    m.active.insert(m.active.end(), entering.begin(), entering.end());
+    if (restart) {
+      stats.contact_events += m.restart(state.t, state.q, state.v, entering, dt);
+      for (int cand : entering) stats.contact_events += m.is_active(cand) ? 1 : 0;
+    } else {
+      m.refresh_terms();
+    }
+
+    // IDA one internal step at a time, so that the loads can be integrated
+    // over each and a root beyond tout is kept for the next call.
+    double t_done = state.t;
+    long n_calls = 0;
+    const int max_events = 4 * m.n_cand + 16;
+    int events = 0;
+    for (;;) {
+      realtype tn = 0;
+      check_ida(IDAGetCurrentTime(m.mem.get(), &tn), "IDAGetCurrentTime");
+      const double horizon = m.pending ? m.t_root : tn;
+      if (horizon > t_done) {
+        const double b = std::min(horizon, tout);
+        m.integrate_loads(t_done, b, stats);
+        t_done = b;
+      }
+      if (t_done >= tout) break;
+      if (m.pending) {
+        if (++events > max_events) {
+          m.need_restart = true;
+          stats.message =
+              "IdaStepper: more than " + std::to_string(max_events) + " contact events in one step";
+          return stats;
+        }
+        try {
+          stats.contact_events += m.handle_root(dt);
+        } catch (const std::runtime_error& e) {
+          m.need_restart = true;
+          stats.message =
+              std::string("contact event at t = ") + std::to_string(m.t_root) + ": " + e.what();
+          return stats;
+        }
+        continue;
+      }
+      if (++n_calls > m.set.max_steps) {
+        m.need_restart = true;
+        stats.message = "IDASolve: IDA_TOO_MUCH_WORK (more than " +
+                        std::to_string(m.set.max_steps) + " internal steps in one step)";
+        return stats;
+      }
+      realtype tret = tn;
+      // In IDA_ONE_STEP mode tout only gives the direction (and must not be
+      // too close to the start after a restart).
+      flag = IDASolve(m.mem.get(), std::max(tout, tn + dt), &tret, m.yy.get(), m.yp.get(),
+                      IDA_ONE_STEP);
+      if (m.error) {
+        m.need_restart = true;
+        std::rethrow_exception(m.error);
+      }
+      if (flag < 0) {
+        // IDA's history may already lie beyond t: start afresh from `state`.
+        m.need_restart = true;
+        stats.iterations = static_cast<int>(m.iters() - iters0);
+        char* name = IDAGetReturnFlagName(flag);
+        stats.message = std::string("IDASolve: ") + (name ? name : "unknown flag");
+        std::free(name);
+        if (!m.last_message.empty()) stats.message += " (" + m.last_message + ")";
+        return stats;
+      }
+      if (flag == IDA_ROOT_RETURN) {
+        m.pending = true;
+        m.t_root = tret;
+        m.y_root = view(m.yy.get());
+        m.roots_found.assign(static_cast<std::size_t>(m.n_cand), 0);
+        check_ida(IDAGetRootInfo(m.mem.get(), m.roots_found.data()), "IDAGetRootInfo");
+      }
+    }
+    check_ida(IDAGetDky(m.mem.get(), tout, 0, m.yq.get()), "IDAGetDky");
+  } catch (...) {
     m.need_restart = true;
-    std::rethrow_exception(m.error);
+    throw;
   }
 
-  StepStats stats;
   stats.iterations = static_cast<int>(m.iters() - iters0);
   char* name = IDAGetReturnFlagName(flag);
   stats.message = std::string("IDASolve: ") + (name ? name : "unknown flag");
   std::free(name);
-  if (flag < 0) {
-    // IDA's history may already lie beyond t: start afresh from `state`.
-    m.need_restart = true;
-    if (!m.last_message.empty()) stats.message += " (" + m.last_message + ")";
-    return stats;
-  }
-
-  const auto y = view(m.yy.get());
+  const auto y = view(m.yq.get());
   state.t = tout;
   state.q = y.segment(0, m.n);
   state.v = y.segment(m.n, m.n);
   state.lambda = y.segment(2 * m.n, m.m);
+  state.active = m.active;
   stats.converged = true;
   stats.residual = constraint_residual(m.s, state.q, state.t);
   m.t_out = state.t;
   m.q_out = state.q;
   m.v_out = state.v;
+  m.active_out = state.active;
   return stats;
 }
 

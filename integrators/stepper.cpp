@@ -33,6 +33,7 @@ std::unique_ptr<Stepper> make_stepper(const std::string& name, const System& sys
     IdaSettings ida;
     ida.rtol = scheme.rtol;
     ida.atol = scheme.atol;
+    ida.gap_tolerance = scheme.gap_tolerance;
     return std::make_unique<IdaStepper>(system, ida);
   }
   if (name == "galpha")
