@@ -1,6 +1,8 @@
 #include "integrators/generalized_alpha.hpp"
 
+#include <algorithm>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -69,6 +71,9 @@ void GeneralizedAlphaSettings::validate() const {
   if (!std::isfinite(gamma))
     throw std::invalid_argument("generalized-alpha gamma must be finite, received " +
                                 std::to_string(gamma));
+  if (!(gap_tolerance >= 0.0) || !std::isfinite(gap_tolerance))
+    throw std::invalid_argument("generalized-alpha gap_tolerance must be >= 0, received " +
+                                std::to_string(gap_tolerance));
   // The velocity constraint reaches a_{n+1} only through gamma.
   if (stabilized && !(gamma > 0.0))
     throw std::invalid_argument(
@@ -97,13 +102,16 @@ SparseMatrix from_triplets(long rows, long cols, const Triplets& t) {
 
 class GeneralizedAlphaStepper::Problem final : public NewtonProblem {
  public:
+  // The constraints of the step: the system's own, then `extra` (the active
+  // contact candidates), in that order (the order of the multipliers).
   Problem(const System& s, const GeneralizedAlphaSettings& p, const State& start, const Vec& a0,
-          const Vec& qdd0, double h)
+          const Vec& qdd0, double h, const std::vector<const Term*>& extra)
       : s_(s),
         p_(p),
-        assembler_(s),
+        cons_(all_constraints(s, extra)),
+        assembler_(s, extra),
         n_(s.n_dofs()),
-        m_(s.n_constraints()),
+        m_(static_cast<int>(cons_.size())),
         m_nu_(p.stabilized ? m_ : 0),
         t1_(start.t + h),
         h_(h),
@@ -132,7 +140,7 @@ class GeneralizedAlphaStepper::Problem final : public NewtonProblem {
     correction_.setZero(n_);
     for (int l = 0; l < m_; ++l) {
       const auto k = static_cast<std::size_t>(l);
-      const Term& c = *s_.constraints()[k];
+      const Term& c = *cons_[k];
       gather(c, q1_, ql_);
       term_gradient(c, GradientKind::Exact, ql_, ql_, t1_, t1_, grads_[k],
                     with_hessians ? &hessians_[k] : nullptr, ws_);
@@ -154,6 +162,11 @@ class GeneralizedAlphaStepper::Problem final : public NewtonProblem {
   }
 
   const Vec& pseudo_acceleration() const { return a1_; }
+  /// After residual(): the loads f(q_{n+1}, t_{n+1}), and the momentum rows
+  /// M qdd + grad V + G^T lambda - f before the prescribed rows replace theirs
+  /// (on those rows: the support reaction).
+  const Vec& load() const { return load_; }
+  const Vec& momentum_rows() const { return momentum_; }
   const Vec& acceleration() const { return qdd1_; }
   const Vec& velocity() const { return v1_; }
 
@@ -162,9 +175,13 @@ class GeneralizedAlphaStepper::Problem final : public NewtonProblem {
     f.resize(size());
     Vec fq = s_.mass() * qdd1_;
     assembler_.add_potential_forces(GradientKind::Exact, q1_, q1_, t1_, t1_, fq, nullptr);
+    // Loads at (q_{n+1}, t_{n+1}), like every other force of the scheme.
+    load_.setZero(n_);
+    if (!s_.loads().empty()) s_.add_load_forces(q1_, t1_, load_);
+    fq -= load_;
     for (int l = 0; l < m_; ++l) {
       const auto k = static_cast<std::size_t>(l);
-      const Term& c = *s_.constraints()[k];
+      const Term& c = *cons_[k];
       const auto& dofs = c.dofs();
       for (std::size_t i = 0; i < dofs.size(); ++i)
         fq[dofs[i]] += x[n_ + l] * grads_[k][static_cast<Eigen::Index>(i)];
@@ -175,6 +192,7 @@ class GeneralizedAlphaStepper::Problem final : public NewtonProblem {
       f[n_ + m_ + l] = grads_[k].dot(vl_) + rates_[l];
     }
     f.head(n_) = fq;
+    momentum_ = fq;
     for (const auto& p : s_.prescribed())
       f[p.dof] = q1_[p.dof] - (p.position ? p.position(t1_) : q0_[p.dof]);
   }
@@ -193,12 +211,13 @@ class GeneralizedAlphaStepper::Problem final : public NewtonProblem {
     trip_.clear();
     force_.setZero(n_);
     assembler_.add_potential_forces(GradientKind::Exact, q1_, q1_, t1_, t1_, force_, &trip_);
+    if (!s_.loads().empty()) s_.add_load_forces(q1_, t1_, force_, &trip_, -1.0);
     for (const auto& p : s_.prescribed()) trip_.emplace_back(p.dof, p.dof, 1.0);
     Triplets mass, g, gf_t, h_nu, h_v;
     assembler_.add_mass(mass, 1.0);
     for (int l = 0; l < m_; ++l) {
       const auto k = static_cast<std::size_t>(l);
-      const Term& c = *s_.constraints()[k];
+      const Term& c = *cons_[k];
       const auto& dofs = c.dofs();
       const Vec& grad = grads_[k];
       const Mat& hess = hessians_[k];
@@ -253,14 +272,23 @@ class GeneralizedAlphaStepper::Problem final : public NewtonProblem {
   }
 
  private:
+  static std::vector<const Term*> all_constraints(const System& s,
+                                                  const std::vector<const Term*>& extra) {
+    std::vector<const Term*> c;
+    for (const auto& t : s.constraints()) c.push_back(t.get());
+    c.insert(c.end(), extra.begin(), extra.end());
+    return c;
+  }
+
   const System& s_;
   const GeneralizedAlphaSettings& p_;
+  const std::vector<const Term*> cons_;
   Assembler assembler_;
   const int n_, m_, m_nu_;
   double t1_, h_, c_ = 0.0;
   const Vec& q0_;
   Vec pred_, known_, v_known_;
-  Vec q1_, a1_, qdd1_, v1_, correction_, rates_, ql_, vl_, force_;
+  Vec q1_, a1_, qdd1_, v1_, correction_, rates_, ql_, vl_, force_, load_, momentum_;
   std::vector<Vec> grads_, grad_rates_;
   std::vector<Mat> hessians_;
   TermWorkspace ws_;
@@ -269,26 +297,137 @@ class GeneralizedAlphaStepper::Problem final : public NewtonProblem {
 
 // --- the stepper --------------------------------------------------------------
 
+namespace {
+
+// Appends candidate `id` to the active set with a zero multiplier.
+void activate(State& s, int id) {
+  s.active.push_back(id);
+  s.lambda.conservativeResize(s.lambda.size() + 1);
+  s.lambda[s.lambda.size() - 1] = 0.0;
+}
+
+// Removes the active candidate at position k (of `active`), with its multiplier.
+void deactivate(State& s, int n_static, std::size_t k) {
+  const Eigen::Index pos = n_static + static_cast<Eigen::Index>(k);
+  Vec lam(s.lambda.size() - 1);
+  lam.head(pos) = s.lambda.head(pos);
+  lam.tail(lam.size() - pos) = s.lambda.tail(s.lambda.size() - pos - 1);
+  s.lambda = lam;
+  s.active.erase(s.active.begin() + static_cast<std::ptrdiff_t>(k));
+}
+
+bool contains(const std::vector<int>& v, int id) {
+  return std::find(v.begin(), v.end(), id) != v.end();
+}
+
+}  // namespace
+
 GeneralizedAlphaStepper::GeneralizedAlphaStepper(const System& system,
                                                  GeneralizedAlphaSettings settings,
                                                  NewtonSettings newton)
-    : system_(system), p_(settings), newton_(newton) {
+    : system_(system),
+      p_(settings),
+      newton_(newton),
+      gap_tol_(settings.gap_tolerance > 0 ? settings.gap_tolerance : 10 * newton.tolerance) {
   p_.validate();
   system_.validate();
-  if (system_.n_unilateral() > 0)
-    throw std::invalid_argument(
-        "GeneralizedAlphaStepper: contact (unilateral constraints) is not supported; the system "
-        "has " +
-        std::to_string(system_.n_unilateral()) + " candidates");
 }
 
 bool GeneralizedAlphaStepper::continues(const State& state) const {
-  return started_ && state.t == t_ && same(state.q, q_) && same(state.v, v_);
+  return started_ && state.t == t_ && same(state.q, q_) && same(state.v, v_) &&
+         state.active == active_;
+}
+
+std::vector<const Term*> GeneralizedAlphaStepper::active_terms(
+    const std::vector<int>& active) const {
+  std::vector<const Term*> terms;
+  terms.reserve(active.size());
+  for (int id : active) terms.push_back(system_.unilateral_term(id));
+  return terms;
+}
+
+Vec GeneralizedAlphaStepper::external_forces(const std::vector<const Term*>& extra, const Vec& q,
+                                             double t, const Vec& qdd, const Vec& lambda,
+                                             const Vec& load) const {
+  // e = f on free rows; on a prescribed row the support's reaction plus the
+  // load there, M qdd + grad V + G^T lambda (the row's momentum balance).
+  Vec e = load;
+  if (system_.prescribed().empty()) return e;
+  Assembler assembler(system_, extra);
+  Vec f = system_.mass() * qdd;
+  assembler.add_potential_forces(GradientKind::Exact, q, q, t, t, f, nullptr);
+  assembler.add_constraint_forces(GradientKind::Exact, q, q, t, t, lambda, f, nullptr, nullptr, 0,
+                                  0);
+  for (const auto& p : system_.prescribed()) e[p.dof] = f[p.dof];
+  return e;
+}
+
+void GeneralizedAlphaStepper::start(State& s) {
+  // A start from an outside state: qdd_0 from the index-1 system (with the
+  // active contact candidates as constraints) and a_0 = qdd_0 (no perturbed
+  // start: with this one Arnold & Bruels find a first-order transient in a
+  // and lambda of the index-3 form, damped when rho_inf < 1; q and v stay
+  // second order, and in the stabilized form so does lambda on the pendulum,
+  // see tests/test_galpha.cpp). The state's velocity is kept as handed in;
+  // qdd_0 is computed with its projection onto G v + Phi_t = 0, which differs
+  // from it only by the constraint error the caller left.
+  const std::vector<const Term*> extra = active_terms(s.active);
+  const ConsistentStart c = consistent_start(system_, s.t, s.q, s.v, extra);
+  qdd_ = c.a;
+  a_ = c.a;
+  s.lambda = c.lambda;
+  load_ = Vec::Zero(system_.n_dofs());
+  if (!system_.loads().empty()) system_.add_load_forces(s.q, s.t, load_);
+  e_ = external_forces(extra, s.q, s.t, qdd_, c.lambda, load_);
+  ea_ = e_;
+  started_ = true;
+  ++n_starts_;
+}
+
+GeneralizedAlphaStepper::Trial GeneralizedAlphaStepper::solve(const State& s, double dt) {
+  const int n = system_.n_dofs();
+  const std::vector<const Term*> extra = active_terms(s.active);
+  const int m = system_.n_constraints() + static_cast<int>(extra.size());
+  Problem problem(system_, p_, s, a_, qdd_, dt, extra);
+  Vec x = Vec::Zero(problem.size());
+  // Predictor: the Taylor step with the last acceleration; nu = 0.
+  x.head(n) = s.q + dt * s.v + 0.5 * dt * dt * a_;
+  if (s.lambda.size() == m) x.segment(n, m) = s.lambda;
+  Trial tr;
+  tr.result = newton_.solve(problem, x, problem.scale());
+  if (!tr.result.converged) return tr;
+  // The same kinematics and forces as the residual's, at the solution.
+  Vec f;
+  problem.residual(x, f);
+  tr.state = s;
+  tr.state.q = x.head(n);
+  tr.state.v = problem.velocity();
+  tr.state.lambda = x.segment(n, m);
+  tr.state.t = s.t + dt;
+  tr.a = problem.pseudo_acceleration();
+  tr.qdd = problem.acceleration();
+  tr.load = problem.load();
+  tr.e = tr.load;
+  for (const auto& p : system_.prescribed())
+    tr.e[p.dof] = problem.momentum_rows()[p.dof] + tr.load[p.dof];
+  return tr;
+}
+
+double GeneralizedAlphaStepper::inactive_below(const State& s, const Vec& q, double threshold,
+                                               std::vector<int>& below) const {
+  double g = std::numeric_limits<double>::infinity();
+  for (int id = 0; id < system_.n_unilateral(); ++id) {
+    if (contains(s.active, id)) continue;
+    const double gi = system_.unilateral_gap(id, q);
+    g = std::min(g, gi);
+    if (gi < threshold) below.push_back(id);
+  }
+  return g;
 }
 
 StepStats GeneralizedAlphaStepper::step(State& state, double dt) {
   const int n = system_.n_dofs();
-  const int m = system_.n_constraints();
+  const int m_sys = system_.n_constraints();
   if (!(dt > 0))
     throw std::invalid_argument("GeneralizedAlphaStepper::step: dt must be positive, received " +
                                 std::to_string(dt));
@@ -296,52 +435,122 @@ StepStats GeneralizedAlphaStepper::step(State& state, double dt) {
     throw std::invalid_argument("GeneralizedAlphaStepper::step: state has " +
                                 std::to_string(state.q.size()) + " positions for a system of " +
                                 std::to_string(n) + " dofs");
-  Vec lambda_guess = state.lambda.size() == m ? state.lambda : Vec::Zero(m);
+  const bool contact = system_.n_unilateral() > 0;
+  if (contact)
+    for (const auto& set : system_.unilateral()) set->prepare(state.q, state.v, dt);
+
+  // The working copy carries the active set and the multiplier guesses.
+  State s = state;
+  if (s.lambda.size() != m_sys + static_cast<Eigen::Index>(s.active.size()))
+    s.lambda = Vec::Zero(m_sys + static_cast<Eigen::Index>(s.active.size()));
+  // Active nodes no longer engaged (nothing of the master opposite) leave.
+  for (std::size_t k = s.active.size(); k-- > 0;)
+    if (!system_.unilateral_term(s.active[k]) ||
+        !std::isfinite(system_.unilateral_gap(s.active[k], s.q)))
+      deactivate(s, m_sys, k);
   if (!continues(state)) {
-    // A start from an outside state: qdd_0 from the index-1 system and
-    // a_0 = qdd_0 (no perturbed start: with this one Arnold & Bruels find a
-    // first-order transient in a and lambda of the index-3 form, damped when
-    // rho_inf < 1; q and v stay second order, and in the stabilized form so
-    // does lambda on the pendulum, see tests/test_galpha.cpp). The state's
-    // velocity is kept as handed in; qdd_0 is computed with its projection
-    // onto G v + Phi_t = 0, which differs from it only by the constraint
-    // error the caller left.
-    const ConsistentStart c = consistent_start(system_, state.t, state.q, state.v);
-    qdd_ = c.a;
-    a_ = c.a;
-    lambda_guess = c.lambda;
-    started_ = true;
-    t_ = state.t;  // a failed first step retries without a new start
+    try {
+      start(s);
+    } catch (const std::runtime_error& e) {
+      StepStats failed;
+      failed.message = std::string("generalized-alpha start: ") + e.what();
+      return failed;
+    }
+    // A failed first step retries without a new start.
+    t_ = state.t;
     q_ = state.q;
     v_ = state.v;
-    ++n_starts_;
+    active_ = state.active;
+  }
+  StepStats stats;
+  int events = 0;
+  if (contact) {
+    // Inactive nodes already touching at t_n enter now (their gap is closed).
+    std::vector<int> touching;
+    inactive_below(s, s.q, gap_tol_, touching);
+    for (int id : touching) activate(s, id);
   }
 
-  Problem problem(system_, p_, state, a_, qdd_, dt);
-  Vec x = Vec::Zero(problem.size());
-  // Predictor: the Taylor step with the last acceleration; nu = 0.
-  x.head(n) = state.q + dt * state.v + 0.5 * dt * dt * a_;
-  x.segment(n, m) = lambda_guess;
-  const NewtonResult r = newton_.solve(problem, x, problem.scale());
-  StepStats stats;
-  stats.converged = r.converged;
-  stats.iterations = r.iterations;
-  stats.residual = r.residual;
-  stats.message = r.message;
-  if (!r.converged) return stats;
-
-  // The same kinematics as the residual's, at the solution.
-  problem.kinematics(x, false);
-  a_ = problem.pseudo_acceleration();
-  qdd_ = problem.acceleration();
-  state.v = problem.velocity();
-  state.q = x.head(n);
-  state.lambda = x.segment(n, m);
-  state.t += dt;
-  t_ = state.t;
-  q_ = state.q;
-  v_ = state.v;
-  return stats;
+  std::vector<int> released;  // released in this step
+  std::vector<int> pinned;    // re-activated after a release: not released again
+  const int max_passes = 4 * system_.n_unilateral() + 8;
+  for (int pass = 0;; ++pass) {
+    if (pass >= max_passes) {
+      stats.converged = false;
+      stats.message = "generalized-alpha: the contact active set did not settle in " +
+                      std::to_string(max_passes) + " solves of the step (" +
+                      std::to_string(s.active.size()) + " active candidates at the last)";
+      return stats;
+    }
+    Trial tr = solve(s, dt);
+    stats.iterations += tr.result.iterations;
+    stats.residual = tr.result.residual;
+    stats.message = tr.result.message;
+    if (!tr.result.converged) return stats;
+    if (contact) {
+      s.lambda = tr.state.lambda;  // better guesses for a re-solve
+      // 1. Release active nodes whose multiplier turned tensile.
+      bool changed = false;
+      for (std::size_t k = s.active.size(); k-- > 0;) {
+        const int id = s.active[k];
+        if (tr.state.lambda[m_sys + static_cast<Eigen::Index>(k)] > 0.0 && !contains(pinned, id)) {
+          released.push_back(id);
+          deactivate(s, m_sys, k);
+          ++events;
+          changed = true;
+        }
+      }
+      if (changed) continue;
+      // 2. Inactive nodes penetrating at the end of the step enter for the
+      // whole step (no impact location: the constraint holds at t_{n+1}).
+      std::vector<int> penetrating;
+      inactive_below(s, tr.state.q, -gap_tol_, penetrating);
+      if (!penetrating.empty()) {
+        for (int id : penetrating) {
+          activate(s, id);
+          if (contains(released, id))
+            pinned.push_back(id);
+          else
+            ++events;
+        }
+        continue;
+      }
+    }
+    // Accepted.
+    const double h = dt;
+    const Vec ea1 =
+        ((1 - p_.alpha_f) * tr.e + p_.alpha_f * e_ - p_.alpha_m * ea_) / (1 - p_.alpha_m);
+    const Vec impulse = h * ((1 - p_.gamma) * ea_ + p_.gamma * ea1);
+    stats.converged = true;
+    stats.contact_events = events;
+    stats.external_work = 0.5 * (load_ + tr.load).dot(tr.state.q - state.q);
+    const int dim = system_.dim();
+    const Vec qm = 0.5 * (state.q + tr.state.q);
+    stats.external_impulse = Vec::Zero(dim);
+    stats.external_angular_impulse = Vec::Zero(dim == 2 ? 1 : 3);
+    for (int node = 0; node < system_.n_nodes(); ++node) {
+      const auto i = impulse.segment(node * dim, dim);
+      const auto x = qm.segment(node * dim, dim);
+      stats.external_impulse += i;
+      if (dim == 2) {
+        stats.external_angular_impulse[0] += x[0] * i[1] - x[1] * i[0];
+      } else {
+        stats.external_angular_impulse +=
+            Eigen::Vector3d(x[0], x[1], x[2]).cross(Eigen::Vector3d(i[0], i[1], i[2]));
+      }
+    }
+    a_ = std::move(tr.a);
+    qdd_ = std::move(tr.qdd);
+    load_ = std::move(tr.load);
+    e_ = std::move(tr.e);
+    ea_ = ea1;
+    state = std::move(tr.state);
+    t_ = state.t;
+    q_ = state.q;
+    v_ = state.v;
+    active_ = state.active;
+    return stats;
+  }
 }
 
 }  // namespace emdae

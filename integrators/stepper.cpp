@@ -36,9 +36,11 @@ std::unique_ptr<Stepper> make_stepper(const std::string& name, const System& sys
     ida.gap_tolerance = scheme.gap_tolerance;
     return std::make_unique<IdaStepper>(system, ida);
   }
-  if (name == "galpha")
-    return std::make_unique<GeneralizedAlphaStepper>(
-        system, GeneralizedAlphaSettings::chung_hulbert(scheme.rho_inf), newton);
+  if (name == "galpha") {
+    GeneralizedAlphaSettings galpha = GeneralizedAlphaSettings::chung_hulbert(scheme.rho_inf);
+    galpha.gap_tolerance = scheme.gap_tolerance;
+    return std::make_unique<GeneralizedAlphaStepper>(system, galpha, newton);
+  }
   std::string known;
   for (const auto& k : known_schemes()) known += (known.empty() ? "" : ", ") + k;
   throw std::invalid_argument("unknown scheme '" + name + "' (known: " + known + ")");
