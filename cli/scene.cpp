@@ -456,7 +456,6 @@ class Builder {
   std::map<int, std::pair<std::string, bool>> prescribed_by_;
   std::vector<std::string> contact_names_, load_names_;
   // Where things were declared that some schemes cannot run.
-  std::string scheme_where_, first_contact_where_, first_load_where_;
 };
 
 void Builder::parse_scene(const Fields& f) {
@@ -505,7 +504,6 @@ void Builder::parse_scheme(const Fields& f) {
                              hint(*name, known, "known schemes"));
     }
     scene_.scheme = *name;
-    scheme_where_ = f.where(*f.find("name"));
   }
   SchemeSettings& ss = scene_.scheme_settings;
   // Settings of one scheme given for another do nothing: say so, since a
@@ -909,7 +907,6 @@ TimeSpec Builder::time_function(const Fields& f, std::string_view k) const {
 void Builder::parse_contact(const Fields& f) {
   f.only({"name", "slave", "master", "search_margin"});
   const std::string where = f.where();
-  if (first_contact_where_.empty()) first_contact_where_ = where;
   const SetRef slave = set_ref(f, "slave", SetKind::Edges, "the slave surface, \"body.set\"");
   const SetRef master = set_ref(f, "master", SetKind::Edges, "the master surface, \"body.set\"");
   if (slave.label == master.label)
@@ -1014,7 +1011,6 @@ void Builder::parse_dirichlet(const Fields& f) {
 
 void Builder::parse_load(const Fields& f) {
   f.only({"name", "type", "on", "body", "torque", "acceleration", "traction", "time_function"});
-  if (first_load_where_.empty()) first_load_where_ = f.where();
   const std::string type = f.string("type", "\"torque\", \"body_force\" or \"traction\"");
   const std::vector<std::string> types = {"torque", "body_force", "traction"};
   if (std::find(types.begin(), types.end(), type) == types.end())
@@ -1188,21 +1184,6 @@ void Builder::finish() {
     fail(particles_.front().where, "particles", "every particle is fixed: nothing to integrate");
   if (static_cast<int>(system().prescribed().size()) == system().n_dofs())
     fail(loc_.start(), "dirichlet", "every node is prescribed: nothing to integrate");
-  // The reference schemes are written for smooth DAEs: they refuse contact
-  // and do not apply external loads. Said here, at the scheme's name, rather
-  // than as the stepper's exception after the scene was accepted.
-  if (scene_.scheme == "ida" || scene_.scheme == "galpha") {
-    const std::string where = scheme_where_.empty() ? loc_.start() : scheme_where_;
-    const std::string received = ", received \"" + scene_.scheme + "\"";
-    if (!first_contact_where_.empty())
-      fail(where, "scheme.name",
-           "scheme '" + scene_.scheme + "' does not support contact (the [[contacts]] at " +
-               first_contact_where_ + "); use \"em\" or \"midpoint\"" + received);
-    if (!first_load_where_.empty())
-      fail(where, "scheme.name",
-           "scheme '" + scene_.scheme + "' does not apply external loads (the [[loads]] at " +
-               first_load_where_ + "); use \"em\" or \"midpoint\"" + received);
-  }
   try {
     scene_.system->validate();
   } catch (const std::invalid_argument& e) {
