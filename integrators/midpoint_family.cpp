@@ -387,18 +387,6 @@ StepStats MidpointFamilyStepper::contact_substep(State& s, double dt) {
           return total;
         }
         const double fc = first_gap(sub.q);
-        // A node closed at t_n (released in this sub-step) that penetrates
-        // at tau as well re-enters for the whole sub-step, at no energy cost
-        // (both its gaps zero), and the sub-step is solved again.
-        for (int id = 0; id < system_.n_unilateral(); ++id)
-          if (std::find(s.active.begin(), s.active.end(), id) == s.active.end() &&
-              std::find(open.begin(), open.end(), id) == open.end() &&
-              system_.unilateral_gap(id, sub.q) < -gap_tol_) {
-            pinned.push_back(id);
-            activate(s, id);
-            reentered = true;
-          }
-        if (reentered) break;
         if (std::abs(fc) <= gap_tol_ || b - a <= 1e-14 * dt) {
           for (int id : open)
             if (system_.unilateral_gap(id, sub.q) <= gap_tol_) activate(sub, id);
@@ -419,7 +407,6 @@ StepStats MidpointFamilyStepper::contact_substep(State& s, double dt) {
           side = +1;
         }
       }
-      if (reentered) continue;
       total.converged = false;
       total.message = "impact location did not converge";
       return total;
