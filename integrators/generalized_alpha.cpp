@@ -299,23 +299,6 @@ class GeneralizedAlphaStepper::Problem final : public NewtonProblem {
 
 namespace {
 
-// Appends candidate `id` to the active set with a zero multiplier.
-void activate(State& s, int id) {
-  s.active.push_back(id);
-  s.lambda.conservativeResize(s.lambda.size() + 1);
-  s.lambda[s.lambda.size() - 1] = 0.0;
-}
-
-// Removes the active candidate at position k (of `active`), with its multiplier.
-void deactivate(State& s, int n_static, std::size_t k) {
-  const Eigen::Index pos = n_static + static_cast<Eigen::Index>(k);
-  Vec lam(s.lambda.size() - 1);
-  lam.head(pos) = s.lambda.head(pos);
-  lam.tail(lam.size() - pos) = s.lambda.tail(s.lambda.size() - pos - 1);
-  s.lambda = lam;
-  s.active.erase(s.active.begin() + static_cast<std::ptrdiff_t>(k));
-}
-
 bool contains(const std::vector<int>& v, int id) {
   return std::find(v.begin(), v.end(), id) != v.end();
 }
@@ -447,7 +430,7 @@ StepStats GeneralizedAlphaStepper::step(State& state, double dt) {
   for (std::size_t k = s.active.size(); k-- > 0;)
     if (!system_.unilateral_term(s.active[k]) ||
         !std::isfinite(system_.unilateral_gap(s.active[k], s.q)))
-      deactivate(s, m_sys, k);
+      deactivate_candidate(s, m_sys, k);
   if (!continues(state)) {
     try {
       start(s);
@@ -468,7 +451,7 @@ StepStats GeneralizedAlphaStepper::step(State& state, double dt) {
     // Inactive nodes already touching at t_n enter now (their gap is closed).
     std::vector<int> touching;
     inactive_below(s, s.q, gap_tol_, touching);
-    for (int id : touching) activate(s, id);
+    for (int id : touching) activate_candidate(s, id);
   }
 
   std::vector<int> released;  // released in this step
@@ -495,7 +478,7 @@ StepStats GeneralizedAlphaStepper::step(State& state, double dt) {
         const int id = s.active[k];
         if (tr.state.lambda[m_sys + static_cast<Eigen::Index>(k)] > 0.0 && !contains(pinned, id)) {
           released.push_back(id);
-          deactivate(s, m_sys, k);
+          deactivate_candidate(s, m_sys, k);
           ++events;
           changed = true;
         }
@@ -507,7 +490,7 @@ StepStats GeneralizedAlphaStepper::step(State& state, double dt) {
       inactive_below(s, tr.state.q, -gap_tol_, penetrating);
       if (!penetrating.empty()) {
         for (int id : penetrating) {
-          activate(s, id);
+          activate_candidate(s, id);
           if (contains(released, id))
             pinned.push_back(id);
           else

@@ -269,27 +269,6 @@ double MidpointFamilyStepper::min_inactive_gap(const State& s, const Vec& q,
   return g;
 }
 
-namespace {
-
-// Appends candidate `id` to the active set with a zero multiplier.
-void activate(State& s, int id) {
-  s.active.push_back(id);
-  s.lambda.conservativeResize(s.lambda.size() + 1);
-  s.lambda[s.lambda.size() - 1] = 0.0;
-}
-
-// Removes the active candidate at position k (of `active`), with its multiplier.
-void deactivate(State& s, int n_static, std::size_t k) {
-  const Eigen::Index pos = n_static + static_cast<Eigen::Index>(k);
-  Vec lam(s.lambda.size() - 1);
-  lam.head(pos) = s.lambda.head(pos);
-  lam.tail(lam.size() - pos) = s.lambda.tail(s.lambda.size() - pos - 1);
-  s.lambda = lam;
-  s.active.erase(s.active.begin() + static_cast<std::ptrdiff_t>(k));
-}
-
-}  // namespace
-
 StepStats MidpointFamilyStepper::contact_substep(State& s, double dt) {
   const int n_static = system_.n_constraints();
   StepStats total;
@@ -302,12 +281,13 @@ StepStats MidpointFamilyStepper::contact_substep(State& s, double dt) {
   // Only the accepted solve's work counts (trials and location solves are discarded).
   // Nodes no longer engaged (nothing of the master opposite) leave the set.
   for (std::size_t k = s.active.size(); k-- > 0;)
-    if (!std::isfinite(system_.unilateral_gap(s.active[k], s.q))) deactivate(s, n_static, k);
+    if (!std::isfinite(system_.unilateral_gap(s.active[k], s.q)))
+      deactivate_candidate(s, n_static, k);
   // Inactive nodes already touching at t_n enter now (their gap is closed).
   {
     std::vector<int> touching;
     min_inactive_gap(s, s.q, &touching, gap_tol_);
-    for (int id : touching) activate(s, id);
+    for (int id : touching) activate_candidate(s, id);
   }
 
   std::vector<int> released;  // released in this sub-step: not released twice
@@ -328,7 +308,7 @@ StepStats MidpointFamilyStepper::contact_substep(State& s, double dt) {
       if (trial.lambda[n_static + static_cast<Eigen::Index>(k)] > 0.0 &&
           std::find(pinned.begin(), pinned.end(), id) == pinned.end()) {
         released.push_back(id);
-        deactivate(s, n_static, k);
+        deactivate_candidate(s, n_static, k);
         ++total.contact_events;
         changed = true;
       }
@@ -352,7 +332,7 @@ StepStats MidpointFamilyStepper::contact_substep(State& s, double dt) {
     for (int id : penetrating)
       if (system_.unilateral_gap(id, s.q) <= gap_tol_) {
         pinned.push_back(id);
-        activate(s, id);
+        activate_candidate(s, id);
         reentered = true;
       }
     if (reentered) continue;
@@ -389,7 +369,7 @@ StepStats MidpointFamilyStepper::contact_substep(State& s, double dt) {
         const double fc = first_gap(sub.q);
         if (std::abs(fc) <= gap_tol_ || b - a <= 1e-14 * dt) {
           for (int id : open)
-            if (system_.unilateral_gap(id, sub.q) <= gap_tol_) activate(sub, id);
+            if (system_.unilateral_gap(id, sub.q) <= gap_tol_) activate_candidate(sub, id);
           ++total.contact_events;
           s = sub;
           total.external_work = rs.external_work;
@@ -411,7 +391,7 @@ StepStats MidpointFamilyStepper::contact_substep(State& s, double dt) {
       total.message = "impact location did not converge";
       return total;
     }
-    for (int id : penetrating) activate(s, id);
+    for (int id : penetrating) activate_candidate(s, id);
     ++total.contact_events;
   }
   total.converged = false;

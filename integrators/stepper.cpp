@@ -9,6 +9,21 @@
 
 namespace emdae {
 
+void activate_candidate(State& s, int id) {
+  s.active.push_back(id);
+  s.lambda.conservativeResize(s.lambda.size() + 1);
+  s.lambda[s.lambda.size() - 1] = 0.0;
+}
+
+void deactivate_candidate(State& s, int n_static, std::size_t k) {
+  const Eigen::Index pos = n_static + static_cast<Eigen::Index>(k);
+  Vec lam(s.lambda.size() - 1);
+  lam.head(pos) = s.lambda.head(pos);
+  lam.tail(lam.size() - pos) = s.lambda.tail(s.lambda.size() - pos - 1);
+  s.lambda = lam;
+  s.active.erase(s.active.begin() + static_cast<std::ptrdiff_t>(k));
+}
+
 State initial_state(const System& system) {
   State s;
   s.q = system.initial_positions();

@@ -10,6 +10,7 @@
 // A stepper never changes dt on its own; cut-back is the driver's job.
 #pragma once
 
+#include <cstddef>
 #include <memory>
 #include <string>
 #include <vector>
@@ -28,6 +29,12 @@ struct State {
   /// Active unilateral candidates (global ids, see System::unilateral_candidate).
   std::vector<int> active;
 };
+
+/// Appends unilateral candidate `id` to state.active with a zero multiplier.
+void activate_candidate(State& s, int id);
+/// Removes the active candidate at position k of state.active with its
+/// multiplier (at n_static + k, after the system's own constraints).
+void deactivate_candidate(State& s, int n_static, std::size_t k);
 
 /// The initial state of a system: its initial positions and velocities, with
 /// prescribed dofs moved to g(0), g'(0), and zero multipliers.
