@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 namespace emdae {
 
@@ -65,13 +66,28 @@ void discrete_gradient(const Term& term, const Vec& q0, const Vec& q1, double t0
     if (jac) ws.block_jac.block(b * m, b * m, m, m) = 0.5 * hm;
     if (quadratic) continue;
     const double d2 = dpi.squaredNorm();
+    if (d2 == 0.0) continue;
     const double scale = std::max(ws.pi0.segment(b * m, m).norm(), ws.pi1.segment(b * m, m).norm());
-    if (d2 <= std::pow(kDiscreteGradientThreshold * scale, 2) || d2 == 0.0) continue;
+    // The numerator of c straight from its definition. For small dpi its
+    // round-off is large against the numerator itself (see below), but it
+    // is exact for a function that is not smooth along [pi0, pi1] (a mortar
+    // gap is only C0 where the segmentation changes). A smooth shortcut
+    // below is kept unless it differs from it by more than round-off plus
+    // 1e-6 of the first-order term |grad f~| |dpi|: a kink's defect is a
+    // sizeable fraction of that, a smooth function's O(|dpi|^2) smaller.
+    const double f0 = term.block_value(b, ws.pi0.segment(b * m, m), tm);
+    const double f1 = term.block_value(b, ws.pi1.segment(b * m, m), tm);
+    const double direct = f1 - f0 - gm.dot(dpi);
+    const double kink_tolerance = 1e3 * std::numeric_limits<double>::epsilon() *
+                                      (std::abs(f0) + std::abs(f1) + std::abs(gm.dot(dpi))) +
+                                  1e-6 * gm.norm() * std::sqrt(d2);
     double c = 0.0;
-    if (d2 > std::pow(kDiscreteGradientQuadratureThreshold * scale, 2)) {
-      const double f0 = term.block_value(b, ws.pi0.segment(b * m, m), tm);
-      const double f1 = term.block_value(b, ws.pi1.segment(b * m, m), tm);
-      c = (f1 - f0 - gm.dot(dpi)) / d2;
+    if (d2 <= std::pow(kDiscreteGradientThreshold * scale, 2)) {
+      // Smooth: the numerator is O(|dpi|^3), below round-off; c = 0.
+      if (std::abs(direct) <= kink_tolerance) continue;
+      c = direct / d2;
+    } else if (d2 > std::pow(kDiscreteGradientQuadratureThreshold * scale, 2)) {
+      c = direct / d2;
     } else {
       // The quotient above loses eps |f~| / |dpi|^2 to cancellation, a force
       // error of eps |f~| / |dpi| that stalls Newton at tight tolerances
@@ -92,7 +108,7 @@ void discrete_gradient(const Term& term, const Vec& q0, const Vec& q1, double t0
         h_plus -= h_minus;
         numerator += 0.25 * kW[k] * (0.5 - r) * dpi.dot(h_plus.lazyProduct(dpi));
       }
-      c = numerator / d2;
+      c = (std::abs(direct - numerator) <= kink_tolerance ? numerator : direct) / d2;
     }
     ws.g_tilde.segment(b * m, m) += c * dpi;
     if (jac) {
