@@ -121,7 +121,7 @@ MidpointFamilyStepper::MidpointFamilyStepper(const System& system, GradientKind 
       kind_(kind),
       newton_(newton),
       scheme_(scheme),
-      gap_tol_(scheme.gap_tolerance > 0 ? scheme.gap_tolerance : 10 * newton.tolerance) {
+      gap_tol_(scheme.gap_tolerance > 0 ? scheme.gap_tolerance : newton.tolerance) {
   system_.validate();
   const int n = system_.n_dofs();
   {
@@ -367,6 +367,20 @@ StepStats MidpointFamilyStepper::contact_substep(State& s, double dt) {
           return total;
         }
         const double fc = first_gap(sub.q);
+        // A node closed at t_n (released in this sub-step) that penetrates
+        // at tau re-enters for the whole sub-step, at no energy cost (both
+        // its gaps closed), and is not released again in it; the sub-step is
+        // solved again. Without this the next sub-step started with it
+        // penetrating (a 4e-5 energy jump at closing speed 40).
+        for (int id = 0; id < system_.n_unilateral(); ++id)
+          if (std::find(s.active.begin(), s.active.end(), id) == s.active.end() &&
+              std::find(open.begin(), open.end(), id) == open.end() &&
+              system_.unilateral_gap(id, sub.q) < -gap_tol_) {
+            pinned.push_back(id);
+            activate_candidate(s, id);
+            reentered = true;
+          }
+        if (reentered) break;
         if (std::abs(fc) <= gap_tol_ || b - a <= 1e-14 * dt) {
           for (int id : open)
             if (system_.unilateral_gap(id, sub.q) <= gap_tol_) activate_candidate(sub, id);
@@ -387,6 +401,7 @@ StepStats MidpointFamilyStepper::contact_substep(State& s, double dt) {
           side = +1;
         }
       }
+      if (reentered) continue;
       total.converged = false;
       total.message = "impact location did not converge";
       return total;
