@@ -26,9 +26,11 @@ RunOutcome integrate(Stepper& stepper, State& state, const TimeSettings& time,
       if (step / 2 < min_dt) {
         std::ostringstream msg;
         msg.precision(6);
-        msg << "Newton failed at t = " << state.t << " with dt = " << step << " ("
-            << stats.iterations << " iterations, residual " << stats.residual << ", "
-            << stats.message << "); no smaller step allowed (min_dt = " << min_dt << ")";
+        // IDA runs its own corrector and error test, not our Newton solve.
+        msg << (stepper.name() == "ida" ? "IDA failed" : "Newton failed") << " at t = " << state.t
+            << " with dt = " << step << " (" << stats.iterations << " iterations, residual "
+            << stats.residual << ", " << stats.message
+            << "); no smaller step allowed (min_dt = " << min_dt << ")";
         out.ok = false;
         out.message = msg.str();
         return out;

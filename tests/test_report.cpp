@@ -225,6 +225,7 @@ TEST(Compare, FailingSchemeIsShownAndTheOthersStillRun) {
                          " --set scheme.atol=1e-300 --quiet --out " +
                          quote(out));
   EXPECT_EQ(r.code, 3) << r.output;  // the worst outcome: a failed run
+  EXPECT_NE(r.output.find("IDA failed at t = 0"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("IDA_TOO_MUCH_ACC"), std::string::npos) << r.output;
   EXPECT_TRUE(fs::exists(fs::path(out) / "em" / "report.html"));
   const std::string html = read_text(fs::path(out) / "compare.html");
