@@ -891,6 +891,16 @@ StepStats IdaStepper::step(State& state, double dt) {
 
     // IDA one internal step at a time, so that the loads can be integrated
     // over each and a root beyond tout is kept for the next call.
+    // With contact, IDA stops at tout (IDASetStopTime): the candidates'
+    // functions are prepared for [t, tout] only, and the root functions are
+    // checked only on the steps IDA takes, so a step beyond tout would be
+    // checked with functions that do not cover it (the contact search's
+    // margin is for dt) and its part beyond tout never with those of the
+    // next call. IDA ends a stopped step within round-off of tout (at
+    // tout - 4 u h): that, or a root there, counts as tout reached.
+    const bool stop_at_tout = m.n_cand > 0;
+    const double t_fuzz =
+        100 * std::numeric_limits<double>::epsilon() * (std::abs(tout) + std::abs(dt));
     double t_done = state.t;
     long n_calls = 0;
     const int max_events = 4 * m.n_cand + 16;
@@ -898,7 +908,8 @@ StepStats IdaStepper::step(State& state, double dt) {
     for (;;) {
       realtype tn = 0;
       check_ida(IDAGetCurrentTime(m.mem.get(), &tn), "IDAGetCurrentTime");
-      const double horizon = m.pending ? m.t_root : tn;
+      double horizon = m.pending ? m.t_root : tn;
+      if (stop_at_tout && horizon >= tout - t_fuzz) horizon = tout;
       if (horizon > t_done) {
         const double b = std::min(horizon, tout);
         m.integrate_loads(t_done, b, stats);
@@ -929,6 +940,9 @@ StepStats IdaStepper::step(State& state, double dt) {
         return stats;
       }
       realtype tret = tn;
+      // Set before every call: IDA clears it when it stops there, and a
+      // restart (IDAReInit) in the loop starts a new history.
+      if (stop_at_tout) check_ida(IDASetStopTime(m.mem.get(), tout), "IDASetStopTime");
       // In IDA_ONE_STEP mode tout only gives the direction (and must not be
       // too close to the start after a restart).
       flag = IDASolve(m.mem.get(), std::max(tout, tn + dt), &tret, m.yy.get(), m.yp.get(),
