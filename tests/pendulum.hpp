@@ -14,6 +14,7 @@
 #include <memory>
 #include <stdexcept>
 
+#include "core/load.hpp"
 #include "core/particles.hpp"
 #include "core/system.hpp"
 
@@ -25,6 +26,36 @@ inline std::unique_ptr<System> pendulum() {
   s->add_mass(0, 0, 1.0);
   s->add_constraint(make_anchor_link(*s, 0, Eigen::Vector2d(0, 0), 1.0));
   s->add_potential(make_dead_load(*s, 0, Eigen::Vector2d(0, -1)));
+  return s;
+}
+
+/// The same pendulum hung from a support node (node 0, prescribed dofs; the
+/// bob is node 1) instead of an anchor point: the node fixed, or driven
+/// along x at 0.1 with the bob starting at (0.1, 1) (in the moving frame the
+/// reference pendulum). Its weight as a potential, or as an external load
+/// (outside the Hamiltonian).
+enum class Support { Fixed, MovingAlongX };
+enum class Weight { Potential, Load };
+inline std::unique_ptr<System> pendulum_on_support(Support support = Support::Fixed,
+                                                   Weight weight = Weight::Potential) {
+  const double u = support == Support::MovingAlongX ? 0.1 : 0.0;
+  auto s = std::make_unique<System>(2);
+  s->add_node(Eigen::Vector2d(0, 0), Eigen::Vector2d(u, 0));
+  s->add_node(Eigen::Vector2d(1, 0), Eigen::Vector2d(u, 1));
+  s->add_mass(0, 0, 1.0);
+  s->add_mass(1, 1, 1.0);
+  if (support == Support::Fixed) {
+    s->fix_node(0);
+  } else {
+    s->prescribe({0, [](double t) { return 0.1 * t; }, [](double) { return 0.1; }});
+    s->prescribe({1, {}, {}});
+  }
+  s->add_constraint(make_link(*s, 0, 1, 1.0));
+  if (weight == Weight::Potential)
+    s->add_potential(make_dead_load(*s, 1, Eigen::Vector2d(0, -1)));
+  else
+    s->add_load(make_nodal_load({2, 3}, Vec(Eigen::Vector2d(0, -1)), TimeFunction::constant(1.0),
+                                "weight"));
   return s;
 }
 

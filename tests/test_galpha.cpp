@@ -258,15 +258,7 @@ TEST(GeneralizedAlphaPendulum, DrivenSupportIsGalileanInvariant) {
   // and the bob starts with (0.1, 1): the Newmark lines integrate the uniform
   // motion exactly, so every step equals the anchored pendulum's shifted by
   // (0.1 t, 0), to round-off.
-  auto moving = std::make_unique<System>(2);
-  moving->add_node(Eigen::Vector2d(0, 0), Eigen::Vector2d(0.1, 0));
-  moving->add_node(Eigen::Vector2d(1, 0), Eigen::Vector2d(0.1, 1));
-  moving->add_mass(0, 0, 1.0);
-  moving->add_mass(1, 1, 1.0);
-  moving->prescribe({0, [](double t) { return 0.1 * t; }, [](double) { return 0.1; }});
-  moving->prescribe({1, {}, {}});
-  moving->add_constraint(make_link(*moving, 0, 1, 1.0));
-  moving->add_potential(make_dead_load(*moving, 1, Eigen::Vector2d(0, -1)));
+  auto moving = test_systems::pendulum_on_support(test_systems::Support::MovingAlongX);
   auto anchored = pendulum();
   const auto p = GeneralizedAlphaSettings::chung_hulbert(0.8);
   const Outcome a = run_galpha(*moving, p, 0.01, 1.0);

@@ -49,22 +49,11 @@
 namespace emdae {
 namespace {
 
-// The same pendulum hung from a node that is fixed (prescribed dofs) rather
-// than from an anchor point.
-std::unique_ptr<System> pendulum_on_fixed_node() {
-  auto s = std::make_unique<System>(2);
-  s->add_node(Eigen::Vector2d(0, 0), Eigen::Vector2d(0, 0));
-  s->add_node(Eigen::Vector2d(1, 0), Eigen::Vector2d(0, 1));
-  s->add_mass(0, 0, 1.0);
-  s->add_mass(1, 1, 1.0);
-  s->fix_node(0);
-  s->add_constraint(make_link(*s, 0, 1, 1.0));
-  s->add_potential(make_dead_load(*s, 1, Eigen::Vector2d(0, -1)));
-  return s;
-}
-
 using test_systems::pendulum;
+using test_systems::pendulum_on_support;
 using test_systems::pendulum_reference;
+using test_systems::Support;
+using test_systems::Weight;
 using Reference = test_systems::PendulumState;
 using ReferenceIntegrator = test_systems::PendulumReference;
 
@@ -222,7 +211,7 @@ TEST(IdaPendulum, RestartsWhenTheStateChangesFromOutside) {
 TEST(IdaPendulum, FixedNodeEqualsAnchor) {
   // Prescribed dofs (the fixed node) are algebraic rows: the motion is the
   // anchored pendulum's, and the fixed node does not move.
-  auto s = pendulum_on_fixed_node();
+  auto s = pendulum_on_support();
   const Reference ref = pendulum_reference(1.0);
   IdaStepper ida(*s, IdaSettings{1e-10, 1e-10});
   const Outcome r = run_ida(*s, ida, 0.1, 1.0);
@@ -236,15 +225,7 @@ TEST(IdaPendulum, DrivenSupportIsGalileanInvariant) {
   // The support node moves with constant velocity (0.1, 0) (prescribed
   // x(t) = 0.1 t, y fixed) and the bob starts with (0.1, 1): in the moving
   // frame this is the reference pendulum, so bob(t) = reference(t) + (0.1 t, 0).
-  auto moving = std::make_unique<System>(2);
-  moving->add_node(Eigen::Vector2d(0, 0), Eigen::Vector2d(0.1, 0));
-  moving->add_node(Eigen::Vector2d(1, 0), Eigen::Vector2d(0.1, 1));
-  moving->add_mass(0, 0, 1.0);
-  moving->add_mass(1, 1, 1.0);
-  moving->prescribe({0, [](double t) { return 0.1 * t; }, [](double) { return 0.1; }});
-  moving->prescribe({1, {}, {}});
-  moving->add_constraint(make_link(*moving, 0, 1, 1.0));
-  moving->add_potential(make_dead_load(*moving, 1, Eigen::Vector2d(0, -1)));
+  auto moving = pendulum_on_support(Support::MovingAlongX);
   const Reference ref = pendulum_reference(1.0);
   IdaStepper ida(*moving, IdaSettings{1e-10, 1e-10});
   const Outcome r = run_ida(*moving, ida, 0.1, 1.0);
@@ -335,21 +316,13 @@ TEST(MakeStepper, BuildsIdaAndGeneralizedAlpha) {
 // --- external loads ---------------------------------------------------------
 
 TEST(IdaLoads, PendulumDrivenByALoadMatchesReference) {
-  // The pendulum of pendulum_on_fixed_node() with its weight as a load
+  // The pendulum of pendulum_on_support() with its weight as a load
   // (make_nodal_load, outside the Hamiltonian) instead of a potential: the
   // same motion as the reference. The energy balance K(t) - K(0) = sum of
   // StepStats::external_work and the momentum balance p(t) - p(0) = sum of
   // external_impulse (the load's and the fixed node's support reaction), and
   // its moment, hold to the quadrature's accuracy.
-  auto s = std::make_unique<System>(2);
-  s->add_node(Eigen::Vector2d(0, 0), Eigen::Vector2d(0, 0));
-  s->add_node(Eigen::Vector2d(1, 0), Eigen::Vector2d(0, 1));
-  s->add_mass(0, 0, 1.0);
-  s->add_mass(1, 1, 1.0);
-  s->fix_node(0);
-  s->add_constraint(make_link(*s, 0, 1, 1.0));
-  s->add_load(
-      make_nodal_load({2, 3}, Vec(Eigen::Vector2d(0, -1)), TimeFunction::constant(1.0), "weight"));
+  auto s = pendulum_on_support(Support::Fixed, Weight::Load);
   const Reference ref = pendulum_reference(1.0);
   IdaStepper ida(*s, IdaSettings{1e-10, 1e-10});
   State st = initial_state(*s);
