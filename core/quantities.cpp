@@ -27,25 +27,28 @@ double constraint_residual(const System& system, const Vec& q, double t) {
   return r;
 }
 
+void resultant_and_moment(int dim, const Vec& x, const Vec& f, Vec& resultant, Vec& moment) {
+  resultant = Vec::Zero(dim);
+  moment = Vec::Zero(dim == 2 ? 1 : 3);
+  for (Eigen::Index a = 0; a + dim <= f.size(); a += dim) {
+    const auto xa = x.segment(a, dim);
+    const auto fa = f.segment(a, dim);
+    resultant += fa;
+    if (dim == 2) {
+      moment[0] += xa[0] * fa[1] - xa[1] * fa[0];
+    } else {
+      moment += Eigen::Vector3d(xa[0], xa[1], xa[2]).cross(Eigen::Vector3d(fa[0], fa[1], fa[2]));
+    }
+  }
+}
+
 Quantities measure(const System& system, const Vec& q, const Vec& v, double t) {
   Quantities out;
   const int dim = system.dim();
   const Vec p = system.mass() * v;
   out.kinetic = 0.5 * v.dot(p);
   out.potential = potential_energy(system, q, t);
-  out.linear_momentum = Vec::Zero(dim);
-  out.angular_momentum = Vec::Zero(dim == 2 ? 1 : 3);
-  for (int a = 0; a < system.n_nodes(); ++a) {
-    const auto qa = q.segment(a * dim, dim);
-    const auto pa = p.segment(a * dim, dim);
-    out.linear_momentum += pa;
-    if (dim == 2) {
-      out.angular_momentum[0] += qa[0] * pa[1] - qa[1] * pa[0];
-    } else {
-      out.angular_momentum +=
-          Eigen::Vector3d(qa[0], qa[1], qa[2]).cross(Eigen::Vector3d(pa[0], pa[1], pa[2]));
-    }
-  }
+  resultant_and_moment(dim, q, p, out.linear_momentum, out.angular_momentum);
   out.phi_max = constraint_residual(system, q, t);
   return out;
 }

@@ -17,6 +17,11 @@ struct Quantities {
 
 Quantities measure(const System& system, const Vec& q, const Vec& v, double t);
 
+/// Resultant sum_A f_A and moment about the origin sum_A x_A x f_A (one
+/// component in 2D) of nodal vectors f (dim entries per node) at positions
+/// x: momenta from (q, M v), impulse balances from (positions, impulses).
+void resultant_and_moment(int dim, const Vec& x, const Vec& f, Vec& resultant, Vec& moment);
+
 /// Sum of the potential terms at (q, t).
 double potential_energy(const System& system, const Vec& q, double t);
 

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "core/assembly.hpp"
+#include "core/quantities.hpp"
 #include "integrators/ida_stepper.hpp"
 
 namespace emdae {
@@ -509,19 +510,7 @@ StepStats GeneralizedAlphaStepper::step(State& state, double dt) {
     stats.external_work = 0.5 * (load_ + tr.load).dot(tr.state.q - state.q);
     const int dim = system_.dim();
     const Vec qm = 0.5 * (state.q + tr.state.q);
-    stats.external_impulse = Vec::Zero(dim);
-    stats.external_angular_impulse = Vec::Zero(dim == 2 ? 1 : 3);
-    for (int node = 0; node < system_.n_nodes(); ++node) {
-      const auto i = impulse.segment(node * dim, dim);
-      const auto x = qm.segment(node * dim, dim);
-      stats.external_impulse += i;
-      if (dim == 2) {
-        stats.external_angular_impulse[0] += x[0] * i[1] - x[1] * i[0];
-      } else {
-        stats.external_angular_impulse +=
-            Eigen::Vector3d(x[0], x[1], x[2]).cross(Eigen::Vector3d(i[0], i[1], i[2]));
-      }
-    }
+    resultant_and_moment(dim, qm, impulse, stats.external_impulse, stats.external_angular_impulse);
     a_ = std::move(tr.a);
     qdd_ = std::move(tr.qdd);
     load_ = std::move(tr.load);

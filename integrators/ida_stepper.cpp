@@ -742,19 +742,7 @@ struct IdaStepper::Impl {
       residual(t, y, view(ypq.get()), Eigen::Map<Vec>(rq.data(), size), false);
       for (const auto& p : s.prescribed()) density[p.dof] += rq[n + p.dof];
     }
-    const int dim = s.dim();
-    impulse = Vec::Zero(dim);
-    angular = Vec::Zero(dim == 2 ? 1 : 3);
-    for (int a = 0; a < s.n_nodes(); ++a) {
-      const auto i = density.segment(a * dim, dim);
-      const auto r = x.segment(a * dim, dim);
-      impulse += i;
-      if (dim == 2) {
-        angular[0] += r[0] * i[1] - r[1] * i[0];
-      } else {
-        angular += Eigen::Vector3d(r[0], r[1], r[2]).cross(Eigen::Vector3d(i[0], i[1], i[2]));
-      }
-    }
+    resultant_and_moment(s.dim(), x, density, impulse, angular);
   }
 
   void integrate_loads(double a, double b, StepStats& stats) {

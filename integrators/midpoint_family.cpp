@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "core/assembly.hpp"
+#include "core/quantities.hpp"
 
 namespace emdae {
 
@@ -213,19 +214,7 @@ void MidpointFamilyStepper::velocity_from_momentum_balance(const State& start, c
   }
   const int dim = system_.dim();
   const Vec qm = 0.5 * (start.q + q1);
-  external_impulse_ = Vec::Zero(dim);
-  external_angular_impulse_ = Vec::Zero(dim == 2 ? 1 : 3);
-  for (int a = 0; a < system_.n_nodes(); ++a) {
-    const auto i = impulse.segment(a * dim, dim);
-    const auto x = qm.segment(a * dim, dim);
-    external_impulse_ += i;
-    if (dim == 2) {
-      external_angular_impulse_[0] += x[0] * i[1] - x[1] * i[0];
-    } else {
-      external_angular_impulse_ +=
-          Eigen::Vector3d(x[0], x[1], x[2]).cross(Eigen::Vector3d(i[0], i[1], i[2]));
-    }
-  }
+  resultant_and_moment(dim, qm, impulse, external_impulse_, external_angular_impulse_);
 }
 
 StepStats MidpointFamilyStepper::solve(State& state, double dt) {
