@@ -22,9 +22,12 @@
 //            10); energy error = max_t |H(t) - H(0)| / H(0).
 //  impact    the paper's two-ring impact, ring_impact(120, 10, 20, 64, 1, 47,
 //            50) of tests/contact_systems.hpp, t_end = 20, dt = 0.01, with em,
-//            midpoint and em without impact location: energy, linear and
-//            angular momentum errors, max |gap| of active nodes, min gap of
-//            inactive ones, contact window, Newton iterations, CPU seconds.
+//            midpoint, galpha, ida and em without impact location: energy,
+//            linear and angular momentum errors, max |gap| of active nodes,
+//            min gap of inactive ones, contact window, Newton iterations, CPU
+//            seconds; then speed against error through the impact: em,
+//            midpoint, galpha at dt = 0.02, 0.01, 0.005 and ida at
+//            rtol = atol = 1e-4, 1e-6, 1e-8 (impact_work_precision.dat).
 //            Plus the history of each run (t, H, relative energy error, |p|,
 //            J, active nodes) in impact_<scheme>.dat.
 //
@@ -342,12 +345,12 @@ struct ImpactRun {
 };
 
 ImpactRun impact_run(const std::string& scheme, bool locate, const std::string& label, double t_end,
-                     const std::string& out_dir) {
+                     const std::string& out_dir, double dt = 0.01, double ida_tol = 1e-8) {
   const test_systems::RingImpact scene = test_systems::ring_impact(120, 10, 20, 64, 1, 47, 50);
   const System& s = *scene.system;
   SchemeSettings settings;
   settings.locate_impacts = locate;
-  const double dt = 0.01;
+  settings.rtol = settings.atol = ida_tol;
   auto stepper = make_stepper(scheme, s, NewtonSettings{1e-11, 25, false}, settings);
   State st = initial_state(s);
   const Quantities q0 = measure(s, st.q, st.v, 0);
@@ -397,6 +400,8 @@ void impact_part(bool quick, const std::string& out_dir) {
   std::vector<ImpactRun> rs;
   rs.push_back(impact_run("em", true, "em", t_end, out_dir));
   rs.push_back(impact_run("midpoint", true, "midpoint", t_end, out_dir));
+  rs.push_back(impact_run("galpha", true, "galpha", t_end, out_dir));
+  rs.push_back(impact_run("ida", true, "ida", t_end, out_dir));
   rs.push_back(impact_run("em", false, "em-nolocate", t_end, out_dir));
   std::printf(
       "\ntwo-ring impact ring_impact(120, 10, 20, 64, 1, 47, 50), dt = 0.01, t_end = %g, Newton "
@@ -424,6 +429,40 @@ void impact_part(bool quick, const std::string& out_dir) {
         << f.newton << ' ' << f.cutbacks << ' ' << f.cpu << ' ' << (f.ok ? 1 : 0) << '\n';
   }
   std::printf("wrote %s/impact_summary.dat and impact_<scheme>.dat\n", out_dir.c_str());
+
+  // Speed against error through the impact: the fixed-step schemes over
+  // step sizes, IDA over tolerances (output every 0.01).
+  std::vector<std::pair<ImpactRun, std::string>> sweep;
+  const std::vector<double> steps =
+      quick ? std::vector<double>{0.02, 0.01} : std::vector<double>{0.02, 0.01, 0.005};
+  const std::vector<double> tols =
+      quick ? std::vector<double>{1e-4, 1e-6} : std::vector<double>{1e-4, 1e-6, 1e-8};
+  for (const char* scheme : {"em", "midpoint", "galpha"})
+    for (double dt : steps) {
+      char label[64], setting[32];
+      std::snprintf(label, sizeof label, "%s-dt%g", scheme, dt);
+      std::snprintf(setting, sizeof setting, "dt = %g", dt);
+      sweep.emplace_back(impact_run(scheme, true, label, t_end, out_dir, dt), setting);
+    }
+  for (double tol : tols) {
+    char label[64], setting[32];
+    std::snprintf(label, sizeof label, "ida-tol%g", tol);
+    std::snprintf(setting, sizeof setting, "tol = %g", tol);
+    sweep.emplace_back(impact_run("ida", true, label, t_end, out_dir, 0.01, tol), setting);
+  }
+  std::printf("\ntwo-ring impact, speed against error (t_end = %g)\n", t_end);
+  std::printf("%-22s %12s %10s %10s %12s %8s %8s  %s\n", "run", "setting", "energy", "angular",
+              "min inact.", "Newton", "CPU s", "status");
+  std::ofstream wp(out_dir + "/impact_work_precision.dat");
+  wp << "# run energy_err ang_err min_inactive_gap newton cpu_s ok\n";
+  for (const auto& [f, setting] : sweep) {
+    std::printf("%-22s %12s %10.2e %10.2e %12.2e %8ld %8.2f  %s\n", f.label.c_str(),
+                setting.c_str(), f.energy_err, f.ang_err, f.min_inactive_gap, f.newton, f.cpu,
+                f.message.c_str());
+    wp << f.label << ' ' << f.energy_err << ' ' << f.ang_err << ' ' << f.min_inactive_gap << ' '
+       << f.newton << ' ' << f.cpu << ' ' << (f.ok ? 1 : 0) << '\n';
+  }
+  std::printf("wrote %s/impact_work_precision.dat\n", out_dir.c_str());
 }
 
 }  // namespace
