@@ -6,10 +6,10 @@ find_package(nlohmann_json 3.10 REQUIRED)
 find_package(tomlplusplus 3 REQUIRED)
 find_package(CLI11 2 REQUIRED)
 
-# SUNDIALS 6.4 (KINSOL, IDA, sparse matrix, SUNLinSol_KLU). Debian's config
+# SUNDIALS 6.4 (KINSOL, IDA, sparse matrix; SUNDIALS::KLU: the KLU it was built with). Debian's config
 # file lists targets for every optional module; we use the shared libraries.
 find_package(SUNDIALS 6.4 REQUIRED CONFIG)
-foreach(_t SUNDIALS::kinsol_shared SUNDIALS::ida_shared SUNDIALS::sunlinsolklu_shared
+foreach(_t SUNDIALS::kinsol_shared SUNDIALS::ida_shared SUNDIALS::KLU
            SUNDIALS::sunmatrixsparse_shared SUNDIALS::nvecserial_shared)
   if(NOT TARGET ${_t})
     message(FATAL_ERROR "SUNDIALS target ${_t} not found: install libsundials-dev (6.4)")

@@ -4,7 +4,6 @@
 #include <ida/ida_ls.h>
 #include <nvector/nvector_serial.h>
 #include <sundials/sundials_context.h>
-#include <sunlinsol/sunlinsol_klu.h>
 #include <sunmatrix/sunmatrix_sparse.h>
 
 #include <Eigen/SparseLU>
@@ -21,6 +20,7 @@
 #include "core/assembly.hpp"
 #include "core/gradient.hpp"
 #include "core/quantities.hpp"
+#include "integrators/klu_solver.hpp"
 
 namespace emdae {
 
@@ -72,16 +72,12 @@ struct VectorFree {
 struct MatrixFree {
   void operator()(SUNMatrix a) const { SUNMatDestroy(a); }
 };
-struct SolverFree {
-  void operator()(SUNLinearSolver s) const { SUNLinSolFree(s); }
-};
 struct IdaFree {
   void operator()(void* mem) const { IDAFree(&mem); }
 };
 using ContextPtr = std::unique_ptr<std::remove_pointer_t<SUNContext>, ContextFree>;
 using VectorPtr = std::unique_ptr<std::remove_pointer_t<N_Vector>, VectorFree>;
 using MatrixPtr = std::unique_ptr<std::remove_pointer_t<SUNMatrix>, MatrixFree>;
-using SolverPtr = std::unique_ptr<std::remove_pointer_t<SUNLinearSolver>, SolverFree>;
 using IdaPtr = std::unique_ptr<void, IdaFree>;
 
 Eigen::Map<Vec> view(N_Vector v) {
@@ -324,7 +320,7 @@ struct IdaStepper::Impl {
   ContextPtr ctx;
   VectorPtr yy, yp, id, yq, ypq;
   MatrixPtr jmat;
-  SolverPtr ls;
+  std::unique_ptr<KluSolver> klu;
   IdaPtr mem;
 
   bool need_restart = true;
@@ -351,7 +347,6 @@ struct IdaStepper::Impl {
   Mat hess;
   Triplets trip, tmp;
   SparseMatrix jac;
-  std::vector<long> outer, inner;  // pattern handed to KLU
 
   // Counters of earlier IDA lives (IDAReInit resets IDA's own).
   long n_inits = 0, steps_before = 0, jacs_before = 0, iters_before = 0;
@@ -417,7 +412,7 @@ struct IdaStepper::Impl {
   // J = dF/dy + cj dF/dy'. Every entry is emitted whatever its value, so the
   // pattern is the same at every call and KLU refactors numerically only
   // (it changes with the active set, the contact search and a load whose
-  // derivative vanishes: hand_to_klu then has KLU analyse it anew).
+  // derivative vanishes: KluSolver::load then has KLU analyse it anew).
   void jacobian(double t, double cj, const Eigen::Map<Vec>& y) {
     q = y.segment(0, n);
     v = y.segment(n, n);
@@ -470,29 +465,6 @@ struct IdaStepper::Impl {
     jac.makeCompressed();
   }
 
-  void hand_to_klu(SUNMatrix a) {
-    const long nnz = jac.nonZeros();
-    const long* op = jac.outerIndexPtr();
-    const long* ip = jac.innerIndexPtr();
-    const bool same_pattern =
-        static_cast<long>(inner.size()) == nnz && static_cast<long>(outer.size()) == size + 1 &&
-        std::equal(op, op + size + 1, outer.begin()) && std::equal(ip, ip + nnz, inner.begin());
-    if (!same_pattern) {
-      // On the first call of a solver, and when the pattern changed (see
-      // jacobian()): KLU is told to analyse the new pattern.
-      if (SUNSparseMatrix_NNZ(a) < nnz)
-        check(SUNSparseMatrix_Reallocate(a, nnz), "SUNSparseMatrix_Reallocate");
-      if (!outer.empty())
-        check(SUNLinSol_KLUReInit(ls.get(), a, SUNSparseMatrix_NNZ(a), SUNKLU_REINIT_PARTIAL),
-              "SUNLinSol_KLUReInit");
-      outer.assign(op, op + size + 1);
-      inner.assign(ip, ip + nnz);
-    }
-    std::copy(op, op + size + 1, SUNSparseMatrix_IndexPointers(a));
-    std::copy(ip, ip + nnz, SUNSparseMatrix_IndexValues(a));
-    std::copy(jac.valuePtr(), jac.valuePtr() + nnz, SUNSparseMatrix_Data(a));
-  }
-
   // Root functions, one per candidate: -lambda_k for an active one (a
   // release when lambda turns tensile), its gap for an inactive one (an
   // impact), gap + gap_tol while it is disarmed; all with direction -1.
@@ -526,7 +498,7 @@ struct IdaStepper::Impl {
     auto* self = static_cast<Impl*>(data);
     try {
       self->jacobian(t, cj, view(y));
-      self->hand_to_klu(a);
+      self->klu->load(self->jac, a);
       return 0;
     } catch (...) {
       self->error = std::current_exception();
@@ -578,7 +550,7 @@ struct IdaStepper::Impl {
   void allocate(double t, const Vec& y0) {
     if (mem) retire_counters();
     mem.reset();
-    ls.reset();
+    klu.reset();
     jmat.reset();
     m = m_sys + static_cast<int>(active.size());
     size = 2 * n + 2 * m;
@@ -595,9 +567,8 @@ struct IdaStepper::Impl {
     jmat.reset(check_ptr(
         SUNSparseMatrix(size, size, std::max<long>(1, jac.nonZeros()), CSC_MAT, ctx.get()),
         "SUNSparseMatrix"));
-    ls.reset(check_ptr(SUNLinSol_KLU(yy.get(), jmat.get(), ctx.get()), "SUNLinSol_KLU"));
-    outer.clear();
-    inner.clear();
+    klu = std::make_unique<KluSolver>(ctx.get(), KluSolver::Ordering::Colamd,
+                                      KluSolver::Pivoting::EverySetup);
   }
 
   // IDA's own first step makes ||h0 y'||_WRMS = 1/2, which at tight
@@ -697,7 +668,7 @@ struct IdaStepper::Impl {
       // One internal step per IDASolve call (IDA_ONE_STEP): the budget of
       // step() is counted there.
       check_ida(IDASetMaxNumSteps(p, set.max_steps), "IDASetMaxNumSteps");
-      check_ls(IDASetLinearSolver(p, ls.get(), jmat.get()), "IDASetLinearSolver");
+      check_ls(IDASetLinearSolver(p, klu->get(), jmat.get()), "IDASetLinearSolver");
       check_ls(IDASetJacFn(p, &Impl::jacobian_cb), "IDASetJacFn");
       if (n_cand > 0) {
         check_ida(IDARootInit(p, n_cand, &Impl::root_cb), "IDARootInit");

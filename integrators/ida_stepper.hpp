@@ -48,9 +48,11 @@
 // values from consistent_start() below (not IDACalcIC, see there), and a
 // first step chosen from the accelerations (IDA's own is ~1e-10 at tight
 // tolerances, where the index-2 Newton matrix is too ill-conditioned). The
-// KLU symbolic analysis is done once per (re)start, and again only when the
-// Jacobian's pattern changes (contact search, a load whose derivative
-// vanishes); every other Jacobian is refactored numerically.
+// KLU symbolic analysis (integrators/klu_solver.hpp) is done once per change
+// of the DAE's size, and again only when the Jacobian's pattern changes
+// (contact search, a load whose derivative vanishes); every other Jacobian
+// is refactored numerically on the kept pivot order, whatever its condition
+// (the GGL matrix's grows like 1/h^2), while the pivots do not degrade.
 //
 // External loads f(q, t) enter the velocity rows, M v' + grad V + G^T lambda
 // - f = 0 (and -df/dq the Jacobian). StepStats::external_work = int f . v dt,

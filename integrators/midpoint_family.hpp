@@ -62,7 +62,7 @@ class MidpointFamilyStepper : public Stepper {
                         SchemeSettings scheme);
   StepStats step(State& state, double dt) override;
 
-  long n_symbolic_analyses() const { return newton_.n_symbolic_analyses(); }
+  KluSolver::Counters klu_counters() const { return newton_.klu_counters(); }
 
  private:
   class Problem;

@@ -3,7 +3,6 @@
 #include <kinsol/kinsol.h>
 #include <nvector/nvector_serial.h>
 #include <sundials/sundials_context.h>
-#include <sunlinsol/sunlinsol_klu.h>
 #include <sunmatrix/sunmatrix_sparse.h>
 
 #include <algorithm>
@@ -31,13 +30,18 @@ T* check_ptr(T* p, const char* call) {
 // A scaled Newton step this small is at the round-off level of O(1) unknowns.
 constexpr double kRoundOffStep = 1e-15;
 
+KluSolver::Counters sum(const KluSolver::Counters& a, const KluSolver::Counters& b) {
+  return {a.analyses + b.analyses, a.factorizations + b.factorizations,
+          a.refactorizations + b.refactorizations};
+}
+
 }  // namespace
 
 struct NewtonSolver::Impl {
   SUNContext ctx = nullptr;
   N_Vector u = nullptr, uscale = nullptr, fscale = nullptr;
   SUNMatrix jmat = nullptr;
-  SUNLinearSolver ls = nullptr;
+  std::unique_ptr<KluSolver> klu;
   void* kin = nullptr;
   int n = -1;
 
@@ -48,8 +52,7 @@ struct NewtonSolver::Impl {
   Vec x, f, scale;
   double last_residual = 0.0;
   SparseMatrix jac;
-  std::vector<long> outer, inner;  // pattern handed to KLU last time
-  long symbolic_analyses = 0;
+  KluSolver::Counters before;  // of the solvers released since
 
   Impl() { check(SUNContext_Create(nullptr, &ctx), "SUNContext_Create"); }
   ~Impl() {
@@ -59,18 +62,16 @@ struct NewtonSolver::Impl {
 
   void release() {
     if (kin) KINFree(&kin);
-    if (ls) SUNLinSolFree(ls);
+    if (klu) before = sum(before, klu->counters());
+    klu.reset();
     if (jmat) SUNMatDestroy(jmat);
     for (N_Vector* v : {&u, &uscale, &fscale})
       if (*v) {
         N_VDestroy(*v);
         *v = nullptr;
       }
-    ls = nullptr;
     jmat = nullptr;
     n = -1;
-    outer.clear();
-    inner.clear();
   }
 
   void setup(int size, const NewtonSettings& s) {
@@ -82,15 +83,15 @@ struct NewtonSolver::Impl {
     fscale = check_ptr(N_VNew_Serial(n, ctx), "N_VNew_Serial");
     N_VConst(1.0, uscale);
     jmat = check_ptr(SUNSparseMatrix(n, n, std::max(1, n), CSC_MAT, ctx), "SUNSparseMatrix");
-    ls = check_ptr(SUNLinSol_KLU(u, jmat, ctx), "SUNLinSol_KLU");
     // AMD: our Jacobians are structurally symmetric (FE stiffness, constraint
     // blocks G and G^T), where AMD orders with far less fill than KLU's
-    // default COLAMD (measured on the bearing: 81 -> see docs/performance.md).
-    check(SUNLinSol_KLUSetOrdering(ls, 0), "SUNLinSol_KLUSetOrdering");
+    // default COLAMD (measured on the bearing: see docs/performance.md). The
+    // solver keeps its analysis across KINSol calls while the pattern holds.
+    klu = std::make_unique<KluSolver>(ctx, KluSolver::Ordering::Amd, KluSolver::Pivoting::Kept);
     kin = check_ptr(KINCreate(ctx), "KINCreate");
     check(KINInit(kin, &Impl::residual_cb, u), "KINInit");
     check(KINSetUserData(kin, this), "KINSetUserData");
-    check(KINSetLinearSolver(kin, ls, jmat), "KINSetLinearSolver");
+    check(KINSetLinearSolver(kin, klu->get(), jmat), "KINSetLinearSolver");
     check(KINSetJacFn(kin, &Impl::jacobian_cb), "KINSetJacFn");
     // Exact Newton: a fresh Jacobian at every iteration.
     check(KINSetMaxSetupCalls(kin, 1), "KINSetMaxSetupCalls");
@@ -135,34 +136,12 @@ struct NewtonSolver::Impl {
       self->x = Eigen::Map<const Vec>(N_VGetArrayPointer(uu), len);
       self->problem->jacobian(self->x, self->jac);
       self->jac.makeCompressed();
-      self->hand_to_klu(jm);
+      self->klu->load(self->jac, jm);
       return 0;
     } catch (...) {
       self->error = std::current_exception();
       return -1;
     }
-  }
-
-  void hand_to_klu(SUNMatrix jm) {
-    const long nnz = jac.nonZeros();
-    const long* op = jac.outerIndexPtr();
-    const long* ip = jac.innerIndexPtr();
-    const bool same = static_cast<long>(inner.size()) == nnz &&
-                      std::equal(op, op + n + 1, outer.begin()) &&
-                      std::equal(ip, ip + nnz, inner.begin());
-    if (!same) {
-      if (SUNSparseMatrix_NNZ(jm) < nnz)
-        check(SUNSparseMatrix_Reallocate(jm, nnz), "SUNSparseMatrix_Reallocate");
-      if (!outer.empty())
-        check(SUNLinSol_KLUReInit(ls, jm, SUNSparseMatrix_NNZ(jm), SUNKLU_REINIT_PARTIAL),
-              "SUNLinSol_KLUReInit");
-      outer.assign(op, op + n + 1);
-      inner.assign(ip, ip + nnz);
-      ++symbolic_analyses;
-    }
-    std::copy(op, op + n + 1, SUNSparseMatrix_IndexPointers(jm));
-    std::copy(ip, ip + nnz, SUNSparseMatrix_IndexValues(jm));
-    std::copy(jac.valuePtr(), jac.valuePtr() + nnz, SUNSparseMatrix_Data(jm));
   }
 };
 
@@ -176,8 +155,9 @@ NewtonSolver::~NewtonSolver() = default;
 NewtonSolver::NewtonSolver(NewtonSolver&&) noexcept = default;
 NewtonSolver& NewtonSolver::operator=(NewtonSolver&&) noexcept = default;
 
-long NewtonSolver::n_symbolic_analyses() const {
-  return impl_->symbolic_analyses;
+KluSolver::Counters NewtonSolver::klu_counters() const {
+  const Impl& m = *impl_;
+  return m.klu ? sum(m.before, m.klu->counters()) : m.before;
 }
 
 NewtonResult NewtonSolver::solve(NewtonProblem& problem, Vec& x, const Vec& residual_scale) {

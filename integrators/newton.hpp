@@ -1,10 +1,11 @@
 // The Newton solve shared by every implicit stepper: KINSOL (exact Newton,
-// optional line search) over a sparse Jacobian factored by SUNLinSol_KLU.
+// optional line search) over a sparse Jacobian factored by KLU
+// (integrators/klu_solver.hpp).
 //
 // The Jacobian is handed over in compressed-column form; while its pattern is
-// unchanged KLU only refactors numerically (the symbolic analysis of the first
-// factorization is reused), and when it changes (an active set moved, a
-// different system) the solver is re-initialized for a new analysis.
+// unchanged KLU only refactors numerically, within a solve and across solves
+// (time steps): the symbolic analysis and the pivot order are reused until
+// the pattern changes (an active set moved, a different system).
 // Convergence is judged on the scaled residual, max_i |s_i F_i| <= tolerance,
 // with the scale s chosen by the caller so that every row has the units of
 // the unknowns (for the mechanical steppers: length).
@@ -14,6 +15,7 @@
 #include <string>
 
 #include "core/system.hpp"
+#include "integrators/klu_solver.hpp"
 
 namespace emdae {
 
@@ -55,8 +57,9 @@ class NewtonSolver {
   NewtonResult solve(NewtonProblem& problem, Vec& x, const Vec& residual_scale);
 
   const NewtonSettings& settings() const { return settings_; }
-  /// Number of symbolic (pattern) analyses KLU performed so far.
-  long n_symbolic_analyses() const;
+  /// What KLU did so far (analyses, factorizations, refactorizations), over
+  /// every system size this solver has seen.
+  KluSolver::Counters klu_counters() const;
 
  private:
   struct Impl;

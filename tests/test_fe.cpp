@@ -27,6 +27,7 @@
 #include "core/material.hpp"
 #include "core/mesh.hpp"
 #include "core/quantities.hpp"
+#include "integrators/energy_momentum.hpp"
 #include "integrators/stepper.hpp"
 
 namespace emdae {
@@ -634,6 +635,31 @@ TEST(FreeFlight, NeoHookeRingEnergyMomentum) {
   EXPECT_LE(em.linear_err, 1e-11);
   EXPECT_LE(em.angular_err, 1e-11);
   EXPECT_LE(em.max_iterations, 6);
+}
+
+// The Newton solve keeps KLU's symbolic analysis and pivot order across time
+// steps while the pattern holds (integrators/klu_solver.hpp): 30 steps of the
+// spinning ring are one analysis and one factorization with pivoting, every
+// other Newton iteration a numeric refactorization. (SUNLinSol_KLU, which
+// KINSOL re-initializes at every solve, analysed and factored once per step.)
+// The figures of the run are those of the free-flight test above.
+TEST(NewtonSolve, KluAnalysisAndPivotsKeptAcrossSteps) {
+  const auto s = spinning_ring(MaterialModel::SaintVenantKirchhoff, 64, 5.0);
+  EnergyMomentumStepper em(*s, NewtonSettings{1e-10, 25, false});
+  State st = initial_state(*s);
+  const double h0 = measure(*s, st.q, st.v, st.t).total();
+  long iterations = 0;
+  for (int k = 0; k < 30; ++k) {
+    const StepStats stats = em.step(st, 0.03);
+    ASSERT_TRUE(stats.converged) << stats.message;
+    iterations += stats.iterations;
+  }
+  const KluSolver::Counters c = em.klu_counters();
+  EXPECT_EQ(c.analyses, 1);
+  EXPECT_EQ(c.factorizations, 1);
+  EXPECT_EQ(c.factorizations + c.refactorizations, iterations);
+  EXPECT_GE(iterations, 60);  // >= 2 per step: the counts above are not trivial
+  EXPECT_LE(std::abs(measure(*s, st.q, st.v, st.t).total() - h0) / h0, 1e-10);
 }
 
 // Order of accuracy: a coarse ring (16 x 1) spinning at omega = 2 and

@@ -1,0 +1,170 @@
+#include "integrators/klu_solver.hpp"
+
+#include <klu.h>
+#include <nvector/nvector_serial.h>
+#include <sunmatrix/sunmatrix_sparse.h>
+
+#include <algorithm>
+#include <stdexcept>
+#include <string>
+#include <type_traits>
+#include <vector>
+
+namespace emdae {
+
+static_assert(std::is_same_v<SuiteSparse_long, sunindextype> &&
+                  std::is_same_v<SuiteSparse_long, SparseMatrix::StorageIndex>,
+              "KLU's long interface, SUNDIALS' and Eigen's indices must be the same type");
+
+namespace {
+
+// A refactorization on the kept pivot order is used while its pivot ratio
+// (klu_rcond: min |U_ii| / max |U_ii|) stays above this fraction of the last
+// fresh factorization's; below, the pivots have degraded and KLU pivots anew.
+constexpr double kRcondDrop = 1e-2;
+
+}  // namespace
+
+struct KluSolver::Impl {
+  SUNLinearSolver shell = nullptr;
+  Pivoting pivoting = Pivoting::Kept;
+  klu_l_common common{};
+  klu_l_symbolic* symbolic = nullptr;
+  klu_l_numeric* numeric = nullptr;
+  bool pattern_changed = true;
+  double rcond_fresh = 0.0;
+  long last_flag = SUNLS_SUCCESS;
+  Counters counters;
+  std::vector<long> outer, inner;  // the pattern analysed last
+
+  ~Impl() {
+    free_numeric();
+    if (symbolic) klu_l_free_symbolic(&symbolic, &common);
+    if (shell) {
+      shell->content = nullptr;
+      SUNLinSolFreeEmpty(shell);
+    }
+  }
+
+  void free_numeric() {
+    if (numeric) klu_l_free_numeric(&numeric, &common);
+  }
+
+  static Impl& of(SUNLinearSolver s) { return *static_cast<Impl*>(s->content); }
+
+  // Factorization with partial pivoting on the analysed pattern.
+  int factor(long* ap, long* ai, double* ax) {
+    free_numeric();
+    numeric = klu_l_factor(ap, ai, ax, symbolic, &common);
+    if (!numeric)
+      return common.status == KLU_SINGULAR ? SUNLS_LUFACT_FAIL : SUNLS_PACKAGE_FAIL_UNREC;
+    ++counters.factorizations;
+    klu_l_rcond(symbolic, numeric, &common);
+    rcond_fresh = common.rcond;
+    return SUNLS_SUCCESS;
+  }
+
+  int setup(SUNMatrix a) {
+    long* ap = SUNSparseMatrix_IndexPointers(a);
+    long* ai = SUNSparseMatrix_IndexValues(a);
+    double* ax = SUNSparseMatrix_Data(a);
+    if (pattern_changed || !symbolic) {
+      free_numeric();
+      if (symbolic) klu_l_free_symbolic(&symbolic, &common);
+      symbolic = klu_l_analyze(SUNSparseMatrix_Columns(a), ap, ai, &common);
+      if (!symbolic) return SUNLS_PACKAGE_FAIL_UNREC;
+      ++counters.analyses;
+      pattern_changed = false;
+      return factor(ap, ai, ax);
+    }
+    if (pivoting == Pivoting::EverySetup) return factor(ap, ai, ax);
+    if (numeric && klu_l_refactor(ap, ai, ax, symbolic, numeric, &common) &&
+        klu_l_rcond(symbolic, numeric, &common) && common.rcond >= kRcondDrop * rcond_fresh) {
+      ++counters.refactorizations;
+      return SUNLS_SUCCESS;
+    }
+    return factor(ap, ai, ax);
+  }
+
+  int solve(N_Vector x, N_Vector b) {
+    if (!numeric) return SUNLS_MEM_NULL;
+    N_VScale(1.0, b, x);
+    const long n = N_VGetLength(x);
+    return klu_l_solve(symbolic, numeric, n, 1, N_VGetArrayPointer(x), &common)
+               ? SUNLS_SUCCESS
+               : SUNLS_PACKAGE_FAIL_REC;
+  }
+
+  // --- the SUNLinearSolver operations ---------------------------------------
+  static SUNLinearSolver_Type type(SUNLinearSolver) { return SUNLINEARSOLVER_DIRECT; }
+  static SUNLinearSolver_ID id(SUNLinearSolver) { return SUNLINEARSOLVER_CUSTOM; }
+  // KINSOL and IDA call this at the start of every solve: the analysis and
+  // the factorization stay (that is the point of this class).
+  static int initialize(SUNLinearSolver s) { return static_cast<int>(of(s).last_flag = 0); }
+  static int setup_op(SUNLinearSolver s, SUNMatrix a) {
+    return static_cast<int>(of(s).last_flag = of(s).setup(a));
+  }
+  static int solve_op(SUNLinearSolver s, SUNMatrix, N_Vector x, N_Vector b, realtype) {
+    return static_cast<int>(of(s).last_flag = of(s).solve(x, b));
+  }
+  static sunindextype last_flag_op(SUNLinearSolver s) { return of(s).last_flag; }
+  static int space(SUNLinearSolver, long* real_words, long* int_words) {
+    *real_words = *int_words = 0;  // KLU's own storage is not counted
+    return SUNLS_SUCCESS;
+  }
+};
+
+KluSolver::KluSolver(SUNContext ctx, Ordering ordering, Pivoting pivoting)
+    : impl_(std::make_unique<Impl>()) {
+  Impl& m = *impl_;
+  m.pivoting = pivoting;
+  if (!klu_l_defaults(&m.common)) throw std::runtime_error("klu_l_defaults failed");
+  m.common.ordering = static_cast<int>(ordering);
+  m.shell = SUNLinSolNewEmpty(ctx);
+  if (!m.shell) throw std::runtime_error("SUNLinSolNewEmpty returned NULL");
+  m.shell->content = &m;
+  SUNLinearSolver_Ops ops = m.shell->ops;
+  ops->gettype = &Impl::type;
+  ops->getid = &Impl::id;
+  ops->initialize = &Impl::initialize;
+  ops->setup = &Impl::setup_op;
+  ops->solve = &Impl::solve_op;
+  ops->lastflag = &Impl::last_flag_op;
+  ops->space = &Impl::space;
+}
+
+KluSolver::~KluSolver() = default;
+
+SUNLinearSolver KluSolver::get() const {
+  return impl_->shell;
+}
+
+const KluSolver::Counters& KluSolver::counters() const {
+  return impl_->counters;
+}
+
+void KluSolver::load(const SparseMatrix& jac, SUNMatrix a) {
+  Impl& m = *impl_;
+  if (!jac.isCompressed()) throw std::logic_error("KluSolver::load: the matrix is not compressed");
+  const long n = jac.cols(), nnz = jac.nonZeros();
+  if (SUNSparseMatrix_Columns(a) != n || SUNSparseMatrix_Rows(a) != jac.rows())
+    throw std::logic_error("KluSolver::load: a " + std::to_string(jac.rows()) + " x " +
+                           std::to_string(n) + " Jacobian for a SUNMatrix of another size");
+  const long* op = jac.outerIndexPtr();
+  const long* ip = jac.innerIndexPtr();
+  const bool same =
+      static_cast<long>(m.outer.size()) == n + 1 && static_cast<long>(m.inner.size()) == nnz &&
+      std::equal(op, op + n + 1, m.outer.begin()) && std::equal(ip, ip + nnz, m.inner.begin());
+  if (!same) {
+    if (SUNSparseMatrix_NNZ(a) < nnz && SUNSparseMatrix_Reallocate(a, nnz) != SUNMAT_SUCCESS)
+      throw std::runtime_error("SUNSparseMatrix_Reallocate failed");
+    m.outer.assign(op, op + n + 1);
+    m.inner.assign(ip, ip + nnz);
+    m.pattern_changed = true;
+  }
+  std::copy(op, op + n + 1, SUNSparseMatrix_IndexPointers(a));
+  std::copy(ip, ip + nnz, SUNSparseMatrix_IndexValues(a));
+  std::copy(jac.valuePtr(), jac.valuePtr() + nnz, SUNSparseMatrix_Data(a));
+}
+
+}  // namespace emdae

@@ -1,0 +1,81 @@
+// A SUNDIALS linear solver over KLU that keeps its symbolic analysis, and
+// its pivot order, for as long as the Jacobian's sparsity pattern holds.
+//
+// Why not SUNLinSol_KLU (SUNDIALS 6.4) as it is:
+//  - its `initialize` throws the analysis away, and KINSOL initializes the
+//    linear solver at the start of every KINSol call: every time step of
+//    em/midpoint/galpha began with klu_analyze + klu_factor (~12 % of the
+//    bearing's CPU time, docs/performance.md §5);
+//  - after each numeric refactorization it compares KLU's reciprocal pivot
+//    ratio with an absolute threshold (eps^(2/3) = 3.7e-11) and, below it and
+//    with a condition estimate above 2.7e10, factors again from scratch. The
+//    index-2 (GGL) iteration matrix of IDA is that ill-conditioned by nature
+//    (its condition grows like 1/h^2), so a fresh factorization is no better:
+//    on the bearing 18 of 19 IDA set-ups paid refactor + condest + factor.
+//
+// What this one does (the pattern of Eigen's analyzePattern / factorize):
+//  - the pattern is compared on every load(); KLU analyses it only when it
+//    changed (contact search, active set, a new system size);
+//  - set-up, Pivoting::Kept (the Newton solve of em, midpoint, galpha and
+//    statics, whose iteration matrix is scaled to a condition of ~1e4):
+//    refactors numerically on the previous pivot order, and factors afresh
+//    (new partial pivoting) only when that is unsafe: the refactor failed (a
+//    zero pivot) or the pivot ratio klu_rcond fell more than a factor
+//    `kRcondDrop` below the one of the last fresh factorization (pivots grown
+//    small under changed values). The test is relative: it watches the pivots
+//    degrade, not the matrix being ill-conditioned, which a new pivoting would
+//    not change;
+//  - set-up, Pivoting::EverySetup (IDA): a fresh factorization with partial
+//    pivoting each time, on the kept analysis. IDA's GGL matrix changes with
+//    cj = alpha/h between set-ups, and solves on stale pivots were too
+//    inaccurate for its Newton iteration: on the bearing (to t = 0.4, rtol =
+//    atol = 1e-5, BDF <= 2) kept pivots took 46 % more iterations and a 7x
+//    larger energy-balance error; fresh ones give SUNLinSol_KLU's iterates
+//    and results exactly, at 0.56 of its CPU time (one factorization per
+//    set-up instead of refactor + condition estimate + factorization);
+//  - a singular matrix is a recoverable set-up failure (SUNLS_LUFACT_FAIL):
+//    KINSOL and IDA then report or cut the step.
+// `initialize` keeps everything; nothing else in SUNDIALS needs to change.
+#pragma once
+
+#include <sundials/sundials_linearsolver.h>
+#include <sundials/sundials_matrix.h>
+
+#include <memory>
+
+#include "core/system.hpp"
+
+namespace emdae {
+
+class KluSolver {
+ public:
+  enum class Ordering { Amd = 0, Colamd = 1 };
+  enum class Pivoting { Kept, EverySetup };
+
+  struct Counters {
+    long analyses = 0;          // symbolic analyses (a new pattern)
+    long factorizations = 0;    // numeric factorizations with pivoting
+    long refactorizations = 0;  // numeric refactorizations on the kept pivot order
+  };
+
+  KluSolver(SUNContext ctx, Ordering ordering, Pivoting pivoting);
+  ~KluSolver();
+  KluSolver(const KluSolver&) = delete;
+  KluSolver& operator=(const KluSolver&) = delete;
+
+  /// The object to hand to KINSetLinearSolver / IDASetLinearSolver.
+  SUNLinearSolver get() const;
+
+  /// Copies `jac` (compressed) into the SUNDIALS CSC matrix `a`, growing its
+  /// storage if needed, and notes whether the pattern differs from the last
+  /// one loaded (then the next set-up analyses it anew).
+  void load(const SparseMatrix& jac, SUNMatrix a);
+
+  const Counters& counters() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace emdae
