@@ -8,7 +8,7 @@
 //  pendulum  the planar double pendulum of tests/particle_systems.hpp (unit
 //            masses and links, gravity 9.81, from rest at 2 rad / 1 rad),
 //            t_end = 2, against an independent reference: the two-angle ODE
-//            integrated by GSL's rk8pd at 1e-13. Error = max over the two
+//            integrated by GSL's rk8pd at 1e-13 (tests/pendulum.hpp). Error = max over the two
 //            particles of |q - q_ref| at t_end; energy error = max_t
 //            |H(t) - H(0)| / (H(0) - V_min) (V_min: both links hanging down;
 //            the denominator is the largest kinetic energy the motion can
@@ -40,7 +40,6 @@
 //                             [--quick]
 // --quick runs fewer step sizes and tolerances (a smoke run, ~1 min).
 #include <gsl/gsl_errno.h>
-#include <gsl/gsl_odeiv2.h>
 
 #include <Eigen/Eigenvalues>
 #include <algorithm>
@@ -64,6 +63,7 @@
 #include "integrators/driver.hpp"
 #include "integrators/stepper.hpp"
 #include "particle_systems.hpp"
+#include "pendulum.hpp"
 
 namespace {
 
@@ -125,38 +125,6 @@ RunResult run(const System& s, const RunSpec& spec, double t_end, double energy_
   if (q_ref && r.ok) r.error = max_nodal_distance(st.q, *q_ref);
   r.final = st;
   return r;
-}
-
-// --- the double pendulum's reference ------------------------------------------
-
-// theta_1, theta_2 from the downward vertical, unit masses and lengths.
-int double_pendulum_rhs(double, const double y[], double dydt[], void*) {
-  const double g = 9.81;
-  const double t1 = y[0], t2 = y[1], w1 = y[2], w2 = y[3];
-  const double d = t1 - t2, den = 3.0 - std::cos(2.0 * d);
-  dydt[0] = w1;
-  dydt[1] = w2;
-  dydt[2] = (-3.0 * g * std::sin(t1) - g * std::sin(t1 - 2.0 * t2) -
-             2.0 * std::sin(d) * (w2 * w2 + w1 * w1 * std::cos(d))) /
-            den;
-  dydt[3] =
-      2.0 * std::sin(d) * (2.0 * w1 * w1 + 2.0 * g * std::cos(t1) + w2 * w2 * std::cos(d)) / den;
-  return GSL_SUCCESS;
-}
-
-Vec double_pendulum_reference(double t_end) {
-  gsl_odeiv2_system sys{double_pendulum_rhs, nullptr, 4, nullptr};
-  gsl_odeiv2_driver* drv =
-      gsl_odeiv2_driver_alloc_y_new(&sys, gsl_odeiv2_step_rk8pd, 1e-4, 1e-13, 1e-13);
-  double y[4] = {2.0, 1.0, 0.0, 0.0}, t = 0.0;
-  const int status = gsl_odeiv2_driver_apply(drv, &t, t_end, y);
-  gsl_odeiv2_driver_free(drv);
-  if (status != GSL_SUCCESS)
-    throw std::runtime_error("GSL reference of the double pendulum failed");
-  Vec q(4);
-  q << std::sin(y[0]), -std::cos(y[0]), std::sin(y[0]) + std::sin(y[1]),
-      -std::cos(y[0]) - std::cos(y[1]);
-  return q;
 }
 
 // --- the free Neo-Hooke ring -----------------------------------------------------
@@ -267,7 +235,7 @@ void study(const std::string& name, const std::string& title, const System& s, d
 void pendulum_part(bool quick, const std::string& out_dir) {
   const double t_end = 2.0;
   auto s = test_systems::double_pendulum();
-  const Vec q_ref = double_pendulum_reference(t_end);
+  const Vec q_ref = test_systems::double_pendulum_reference(t_end);
   const double h0 = measure(*s, s->initial_positions(), s->initial_velocities(), 0.0).total();
   const double v_min = 9.81 * (-1.0 - 2.0);
   // Check the reference against the energy-momentum scheme at a fine step.

@@ -26,6 +26,9 @@
 //    unknowns. Index 2 is handled by BDF once the algebraic variables
 //    (lambda, mu) are left out of the local error test (IDASetId +
 //    IDASetSuppressAlg), as in SUNDIALS' own slider-crank example.
+// Measured against index 1 (with and without projection) and index 3 on the
+// pendulum and the double pendulum over [0, 100]: docs/ida-formulations.md
+// (bench/ida_formulations.cpp).
 //
 // Prescribed dofs are algebraic rows q_i = g_i(t), v_i = g'_i(t), excluded
 // from the error test like the multipliers; their columns stay in the

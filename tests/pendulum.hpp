@@ -5,6 +5,8 @@
 // integrated by GSL's rk8pd to 1e-14; then q = (sin, -cos) theta,
 // v = (cos, sin) theta theta', and the link tension lambda = |v|^2 + cos theta
 // (from q . a + |v|^2 = 0 with a = (0, -1) - lambda q).
+// Also the reference of the double pendulum of particle_systems.hpp, by the
+// same route (its two-angle ODE).
 #pragma once
 
 #include <gsl/gsl_errno.h>
@@ -94,6 +96,40 @@ class PendulumReference {
 
 inline PendulumState pendulum_reference(double t) {
   return PendulumReference().at(t);
+}
+
+/// The double pendulum of particle_systems.hpp (unit masses and links,
+/// gravity 9.81, from rest at 2 rad / 1 rad from the downward vertical) at
+/// time t: its two-angle ODE integrated by GSL's rk8pd at 1e-13; q =
+/// (x1, y1, x2, y2).
+inline Vec double_pendulum_reference(double t) {
+  struct Ode {
+    static int rhs(double, const double y[], double dydt[], void*) {
+      const double g = 9.81;
+      const double t1 = y[0], t2 = y[1], w1 = y[2], w2 = y[3];
+      const double d = t1 - t2, den = 3.0 - std::cos(2.0 * d);
+      dydt[0] = w1;
+      dydt[1] = w2;
+      dydt[2] = (-3.0 * g * std::sin(t1) - g * std::sin(t1 - 2.0 * t2) -
+                 2.0 * std::sin(d) * (w2 * w2 + w1 * w1 * std::cos(d))) /
+                den;
+      dydt[3] = 2.0 * std::sin(d) *
+                (2.0 * w1 * w1 + 2.0 * g * std::cos(t1) + w2 * w2 * std::cos(d)) / den;
+      return GSL_SUCCESS;
+    }
+  };
+  gsl_odeiv2_system sys{Ode::rhs, nullptr, 4, nullptr};
+  gsl_odeiv2_driver* drv =
+      gsl_odeiv2_driver_alloc_y_new(&sys, gsl_odeiv2_step_rk8pd, 1e-4, 1e-13, 1e-13);
+  double y[4] = {2.0, 1.0, 0.0, 0.0}, t0 = 0.0;
+  const int status = gsl_odeiv2_driver_apply(drv, &t0, t, y);
+  gsl_odeiv2_driver_free(drv);
+  if (status != GSL_SUCCESS)
+    throw std::runtime_error("GSL reference of the double pendulum failed");
+  Vec q(4);
+  q << std::sin(y[0]), -std::cos(y[0]), std::sin(y[0]) + std::sin(y[1]),
+      -std::cos(y[0]) - std::cos(y[1]);
+  return q;
 }
 
 }  // namespace emdae::test_systems
