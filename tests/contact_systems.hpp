@@ -6,6 +6,7 @@
 #include "contact/mortar_contact.hpp"
 #include "core/load.hpp"
 #include "core/mesh.hpp"
+#include "core/particles.hpp"
 #include "core/system.hpp"
 
 namespace emdae::test_systems {
@@ -60,8 +61,15 @@ struct Bearing {
   const MortarContact* contact = nullptr;
   BodyInfo outer, inner;
   std::vector<int> inner_surface;  // the inner ring's inner boundary (torque, rotation hold)
+  std::vector<int> outer_surface;  // the outer ring's outer boundary (the support)
   double torque_peak = 0.0;
 };
+
+/// How the outer ring's outer boundary is held: clamped (the paper's fixed
+/// nodes), or on radial rollers (each node kept at its distance from the
+/// centre by a rigid link to it: free to slide around, so nothing holds the
+/// bearing against turning as a whole).
+enum class BearingSupport { Clamped, RadialRollers };
 
 /// The paper's bearing (§5.1): outer ring (inner diameter 80, outer 100,
 /// 10 x 48 elements, outer boundary fixed), inner ring (inner diameter 50,
@@ -70,7 +78,7 @@ struct Bearing {
 /// inner ring's outer surface (slave) on the outer ring's inner surface
 /// (master), a torque hat(0, 0.5, peak) on the inner ring's inner boundary.
 inline Bearing bearing(double torque_peak = 1e4, int through = 10, int around_outer = 48,
-                       int around_inner = 40) {
+                       int around_inner = 40, BearingSupport support = BearingSupport::Clamped) {
   Bearing b;
   b.system = std::make_unique<System>(2);
   System& s = *b.system;
@@ -82,7 +90,15 @@ inline Bearing bearing(double torque_peak = 1e4, int through = 10, int around_ou
   oo.name = "outer ring", io.name = "inner ring";
   b.outer = add_body(s, outer, mat, oo);
   b.inner = add_body(s, inner, mat, io);
-  for (int n : outer.node_sets.at("outer")) s.fix_node(n + b.outer.node_offset);
+  for (int n : outer.node_sets.at("outer")) b.outer_surface.push_back(n + b.outer.node_offset);
+  for (int n : b.outer_surface) {
+    if (support == BearingSupport::Clamped) {
+      s.fix_node(n);
+    } else {
+      const double r = s.initial_positions().segment<2>(2 * n).norm();
+      s.add_constraint(make_anchor_link(s, n, Vec::Zero(2), r));
+    }
+  }
   auto contact =
       std::make_unique<MortarContact>(s, surface(inner, "outer", b.inner.node_offset),
                                       surface(outer, "inner", b.outer.node_offset), "bearing");
