@@ -8,6 +8,7 @@
 #include <CLI/CLI.hpp>
 #include <algorithm>
 #include <cctype>
+#include <cerrno>
 #include <chrono>
 #include <cmath>
 #include <csignal>
@@ -16,6 +17,7 @@
 #include <exception>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <iostream>
 #include <map>
 #include <memory>
@@ -31,6 +33,7 @@
 #include "verify/history.hpp"
 #include "verify/recorder.hpp"
 #include "verify/report.hpp"
+#include "verify/study.hpp"
 #include "verify/summary.hpp"
 #include "verify/vtu.hpp"
 
@@ -468,6 +471,109 @@ class FieldOutput {
   std::unique_ptr<FieldWriter> writer_;
 };
 
+// --- the steps of every run: `run`, `compare` and `study` go through these ------------
+
+// The scene with its overrides and the stepper of its scheme: where every
+// problem with the input shows, before any output exists. Returns the
+// message of what is wrong, or an empty string.
+std::string prepare_run(const std::string& scene_path, const std::vector<SceneOverride>& overrides,
+                        std::unique_ptr<Scene>& scene, std::unique_ptr<Stepper>& stepper) {
+  try {
+    scene = load(scene_path, overrides);
+  } catch (const SceneError& e) {
+    return e.what();
+  }
+  // The scene parser refuses what a scheme cannot run; this is the last word.
+  try {
+    stepper = make_stepper(scene->scheme, *scene->system, scene->newton, scene->scheme_settings);
+  } catch (const std::invalid_argument& e) {
+    return fmt::format("scheme '{}' cannot run scene '{}': {}", scene->scheme, scene->name,
+                       e.what());
+  }
+  return {};
+}
+
+RunInfo run_info(const Scene& scene) {
+  RunInfo info;
+  info.scene = scene.name;
+  info.scheme = scene.scheme;
+  info.source = scene.source_path;
+  info.dt = scene.time.dt;
+  info.t_end = scene.time.t_end;
+  return info;
+}
+
+// [statics]: equilibrium first (the bearing's pre-stress); the run starts
+// from it, at rest, with its active contact set. Returns kExitOk, or
+// kExitRunFailed with info.status saying why.
+int solve_statics(const Scene& scene, std::unique_ptr<Stepper>& stepper, State& state,
+                  RunInfo& info) {
+  if (!scene.statics.enabled) return kExitOk;
+  const double start = cpu_now();
+  StaticResult r;
+  try {
+    r = solve_static(*scene.system, state, scene.statics.settings, scene.statics.hold_rotation);
+  } catch (const std::exception& e) {
+    r.message = std::string("static solve: ") + e.what();
+  }
+  StaticsOutcome st;
+  st.converged = r.converged;
+  // solve_static counts one past max_steps when it runs out of them.
+  st.steps = std::min(r.steps, scene.statics.settings.max_steps);
+  st.newton_iterations = r.newton_iterations;
+  st.change = r.change;
+  st.holds = scene.statics.hold_names;
+  st.holding_moments = r.holding_moments;
+  st.active_contacts = static_cast<int>(state.active.size());
+  st.cpu_seconds = cpu_now() - start;
+  st.message = r.message;
+  info.statics = st;
+  // The solve added and removed its rotation holds: a stepper made before
+  // it must not carry anything over.
+  stepper = make_stepper(scene.scheme, *scene.system, scene.newton, scene.scheme_settings);
+  if (r.converged) return kExitOk;
+  info.status = r.message;
+  return kExitRunFailed;
+}
+
+// The recorder of a run, from the state it starts from.
+Recorder make_recorder(const Scene& scene, const State& state) {
+  Recorder recorder(*scene.system, state);
+  recorder.set_load_free_test([&scene](double a, double b) { return scene.loads_vanish(a, b); });
+  return recorder;
+}
+
+// The time loop: each accepted step goes to the recorder, then to
+// `on_sample` (history, fields, progress); SIGINT and SIGTERM end it between
+// steps. Sets info.status and info.cpu_seconds (the process CPU time of the
+// loop); returns kExitOk, kExitRunFailed, kExitInterrupted or kExitInternal.
+int integrate_scene(const Scene& scene, Stepper& stepper, State& state, Recorder& recorder,
+                    RunInfo& info,
+                    const std::function<void(const State&, const Sample&)>& on_sample) {
+  int exit_code = kExitOk;
+  const double cpu_start = cpu_now();
+  {
+    const SignalGuard signals;
+    try {
+      const RunOutcome outcome =
+          integrate(stepper, state, scene.time, [&](const State& s, const AcceptedStep& step) {
+            on_sample(s, recorder.observe(s, step));
+            if (g_interrupted) throw Interrupted("interrupted at t = " + fmt::format("{}", s.t));
+          });
+      info.status = outcome.message;
+      if (!outcome.ok) exit_code = kExitRunFailed;
+    } catch (const Interrupted& e) {
+      info.status = e.what();
+      exit_code = kExitInterrupted;
+    } catch (const std::exception& e) {
+      info.status = std::string("internal error: ") + e.what();
+      exit_code = kExitInternal;
+    }
+  }
+  info.cpu_seconds = cpu_now() - cpu_start;
+  return exit_code;
+}
+
 int run_scene(const RunOptions& options, std::ostream& out, std::ostream& err, RunRecord& record) {
   const auto bad_input = [&](const std::string& message) {
     fmt::print(err, "emdae: error: {}\n", message);
@@ -487,24 +593,12 @@ int run_scene(const RunOptions& options, std::ostream& out, std::ostream& err, R
   // Everything that can be wrong with the input is found here, before any
   // output exists.
   std::unique_ptr<Scene> scene;
-  try {
-    scene = load(options.scene_path, overrides);
-  } catch (const SceneError& e) {
-    return bad_input(e.what());
-  }
-  for (const auto& w : scene->warnings) fmt::print(err, "emdae: warning: {}\n", w);
-  const System& system = *scene->system;
-  // The scene parser refuses what a scheme cannot run; this is the last word.
-  const auto build_stepper = [&] {
-    return make_stepper(scene->scheme, system, scene->newton, scene->scheme_settings);
-  };
   std::unique_ptr<Stepper> stepper;
-  try {
-    stepper = build_stepper();
-  } catch (const std::invalid_argument& e) {
-    return bad_input(
-        fmt::format("scheme '{}' cannot run scene '{}': {}", scene->scheme, scene->name, e.what()));
-  }
+  const std::string problem = prepare_run(options.scene_path, overrides, scene, stepper);
+  if (scene)
+    for (const auto& w : scene->warnings) fmt::print(err, "emdae: warning: {}\n", w);
+  if (!problem.empty()) return bad_input(problem);
+  const System& system = *scene->system;
 
   const std::string dir =
       options.out_dir.empty() ? "out/" + scene->name + "-" + scene->scheme : options.out_dir;
@@ -518,41 +612,9 @@ int run_scene(const RunOptions& options, std::ostream& out, std::ostream& err, R
   const std::string summary_path = (fs::path(dir) / "summary.json").string();
 
   State state = initial_state(system);
-  RunInfo info;
-  int exit_code = kExitOk;
-  // [statics]: equilibrium first (the bearing's pre-stress); the run starts
-  // from it, at rest, with its active contact set.
-  if (scene->statics.enabled) {
-    const double start = cpu_now();
-    StaticResult r;
-    try {
-      r = solve_static(*scene->system, state, scene->statics.settings,
-                       scene->statics.hold_rotation);
-    } catch (const std::exception& e) {
-      r.message = std::string("static solve: ") + e.what();
-    }
-    StaticsOutcome st;
-    st.converged = r.converged;
-    // solve_static counts one past max_steps when it runs out of them.
-    st.steps = std::min(r.steps, scene->statics.settings.max_steps);
-    st.newton_iterations = r.newton_iterations;
-    st.change = r.change;
-    st.holds = scene->statics.hold_names;
-    st.holding_moments = r.holding_moments;
-    st.active_contacts = static_cast<int>(state.active.size());
-    st.cpu_seconds = cpu_now() - start;
-    st.message = r.message;
-    info.statics = st;
-    if (!r.converged) {
-      info.status = r.message;
-      exit_code = kExitRunFailed;
-    }
-    // The solve added and removed its rotation holds: a stepper made before
-    // it must not carry anything over.
-    stepper = build_stepper();
-  }
-  Recorder recorder(system, state);
-  recorder.set_load_free_test([&scene](double a, double b) { return scene->loads_vanish(a, b); });
+  RunInfo info = run_info(*scene);
+  int exit_code = solve_statics(*scene, stepper, state, info);
+  Recorder recorder = make_recorder(*scene, state);
   std::unique_ptr<HistoryWriter> history;
   try {
     history = std::make_unique<HistoryWriter>(history_path, system.dim(),
@@ -564,41 +626,19 @@ int run_scene(const RunOptions& options, std::ostream& out, std::ostream& err, R
   FieldOutput fields(*scene, dir, err);
   fields.maybe_write(state, 0);
 
-  info.scene = scene->name;
-  info.scheme = scene->scheme;
-  info.source = scene->source_path;
-  info.dt = scene->time.dt;
-  info.t_end = scene->time.t_end;
-
   Progress progress(err, options.quiet, state.t, scene->time.t_end, options.progress_label);
   long last_written = 0;
-  const double cpu_start = cpu_now();
   // A failed static solve leaves nothing to integrate from.
-  if (exit_code == kExitOk) {
-    const SignalGuard signals;
-    try {
-      const RunOutcome outcome =
-          integrate(*stepper, state, scene->time, [&](const State& s, const AcceptedStep& step) {
-            const Sample& sample = recorder.observe(s, step);
-            if (sample.step % scene->output.every == 0) {
-              history->write(sample);
-              last_written = sample.step;
-            }
-            fields.maybe_write(s, sample.step);
-            progress.update(sample, recorder.newton_iterations());
-            if (g_interrupted) throw Interrupted("interrupted at t = " + fmt::format("{}", s.t));
-          });
-      info.status = outcome.message;
-      if (!outcome.ok) exit_code = kExitRunFailed;
-    } catch (const Interrupted& e) {
-      info.status = e.what();
-      exit_code = kExitInterrupted;
-    } catch (const std::exception& e) {
-      info.status = std::string("internal error: ") + e.what();
-      exit_code = kExitInternal;
-    }
-  }
-  info.cpu_seconds = cpu_now() - cpu_start;
+  if (exit_code == kExitOk)
+    exit_code = integrate_scene(*scene, *stepper, state, recorder, info,
+                                [&](const State& s, const Sample& sample) {
+                                  if (sample.step % scene->output.every == 0) {
+                                    history->write(sample);
+                                    last_written = sample.step;
+                                  }
+                                  fields.maybe_write(s, sample.step);
+                                  progress.update(sample, recorder.newton_iterations());
+                                });
   progress.finish();
   // The last state always ends the fields too.
   fields.maybe_write(state, recorder.last().step, true);
@@ -646,6 +686,82 @@ std::vector<std::string> split_list(const std::string& text) {
   return items;
 }
 
+// The schemes of --schemes, each known and given once; on error the
+// message of what is wrong.
+std::vector<std::string> parse_schemes(const std::string& text, std::string& problem) {
+  const std::vector<std::string> schemes = split_list(text);
+  const auto known = known_schemes();
+  std::string known_list;
+  for (const auto& k : known) known_list += (known_list.empty() ? "" : ", ") + k;
+  if (schemes.empty()) {
+    problem = fmt::format("--schemes: no scheme given (known: {})", known_list);
+    return {};
+  }
+  for (std::size_t i = 0; i < schemes.size(); ++i) {
+    if (std::find(known.begin(), known.end(), schemes[i]) == known.end()) {
+      problem = fmt::format("--schemes: unknown scheme '{}' (known: {})", schemes[i], known_list);
+      return {};
+    }
+    if (std::find(schemes.begin(), schemes.begin() + static_cast<long>(i), schemes[i]) !=
+        schemes.begin() + static_cast<long>(i)) {
+      problem = fmt::format("--schemes: '{}' is given twice", schemes[i]);
+      return {};
+    }
+  }
+  return schemes;
+}
+
+// The exit code of several runs: the worst outcome wins, an internal error
+// over a failed run over a failed check over success. A run that refused
+// its input (bad input of one run, not of the command) counts as failed.
+int worse(int current, int code) {
+  const auto rank = [](int c) {
+    return c == kExitOk ? 0 : c == kExitChecksFailed ? 1 : c == kExitInternal ? 3 : 2;
+  };
+  if (rank(code) <= rank(current)) return current;
+  return code == kExitBadInput ? kExitRunFailed : code;
+}
+
+// A number of the command line: all of `text`, finite.
+std::optional<double> parse_number(const std::string& text) {
+  if (text.empty() || std::isspace(static_cast<unsigned char>(text.front()))) return std::nullopt;
+  char* end = nullptr;
+  errno = 0;
+  const double x = std::strtod(text.c_str(), &end);
+  if (end != text.c_str() + text.size() || errno == ERANGE || !std::isfinite(x))
+    return std::nullopt;
+  return x;
+}
+
+// The values of a comma-separated list option (--dts, --tols): numbers,
+// each once, in the open interval (0, upper); sorted from the largest down.
+std::vector<double> parse_values(const std::string& option, const std::string& text,
+                                 const char* what, double upper, std::string& problem) {
+  std::vector<double> values;
+  for (const auto& item : split_list(text)) {
+    const auto x = parse_number(item);
+    if (!x) {
+      problem = fmt::format("{}: '{}' is not a number", option, item);
+      return {};
+    }
+    if (!(*x > 0 && *x < upper)) {
+      problem =
+          std::isinf(upper)
+              ? fmt::format("{}: {} must be positive, received {}", option, what, item)
+              : fmt::format("{}: {} must be in (0, {:g}), received {}", option, what, upper, item);
+      return {};
+    }
+    if (std::find(values.begin(), values.end(), *x) != values.end()) {
+      problem = fmt::format("{}: {} is given twice", option, item);
+      return {};
+    }
+    values.push_back(*x);
+  }
+  if (values.empty()) problem = fmt::format("{}: no {} given", option, what);
+  std::sort(values.begin(), values.end(), std::greater<>());
+  return values;
+}
+
 }  // namespace
 
 int command_run(const RunOptions& options, std::ostream& out, std::ostream& err) {
@@ -668,25 +784,11 @@ int command_compare(const CompareOptions& options, std::ostream& out, std::ostre
     fmt::print(err, "emdae: error: {}\n", e.what());
     return kExitBadInput;
   }
-  const std::vector<std::string> schemes = split_list(options.schemes);
-  const auto known = known_schemes();
-  std::string known_list;
-  for (const auto& k : known) known_list += (known_list.empty() ? "" : ", ") + k;
-  if (schemes.empty()) {
-    fmt::print(err, "emdae: error: --schemes: no scheme given (known: {})\n", known_list);
+  std::string problem;
+  const std::vector<std::string> schemes = parse_schemes(options.schemes, problem);
+  if (!problem.empty()) {
+    fmt::print(err, "emdae: error: {}\n", problem);
     return kExitBadInput;
-  }
-  for (std::size_t i = 0; i < schemes.size(); ++i) {
-    if (std::find(known.begin(), known.end(), schemes[i]) == known.end()) {
-      fmt::print(err, "emdae: error: --schemes: unknown scheme '{}' (known: {})\n", schemes[i],
-                 known_list);
-      return kExitBadInput;
-    }
-    if (std::find(schemes.begin(), schemes.begin() + static_cast<long>(i), schemes[i]) !=
-        schemes.begin() + static_cast<long>(i)) {
-      fmt::print(err, "emdae: error: --schemes: '{}' is given twice\n", schemes[i]);
-      return kExitBadInput;
-    }
   }
   const std::string dir =
       options.out_dir.empty() ? "out/" + scene->name + "-compare" : options.out_dir;
@@ -723,11 +825,7 @@ int command_compare(const CompareOptions& options, std::ostream& out, std::ostre
       exit_code = kExitInterrupted;
       break;
     }
-    // Worst outcome wins: a failed run over a failed check over success.
-    const auto rank = [](int c) {
-      return c == kExitOk ? 0 : c == kExitChecksFailed ? 1 : c == kExitInternal ? 3 : 2;
-    };
-    if (rank(code) > rank(exit_code)) exit_code = code == kExitBadInput ? kExitRunFailed : code;
+    exit_code = worse(exit_code, code);
   }
 
   ReportInfo info = report_info(*scene);
@@ -766,6 +864,236 @@ int command_compare(const CompareOptions& options, std::ostream& out, std::ostre
     fmt::print(out, "  output    {}/compare.html\n", dir);
   }
   return exit_code;
+}
+
+namespace {
+
+// One run of a study: the scene with `overrides`, made as `emdae run` makes
+// it (prepare_run, solve_statics, integrate_scene and the summary) but
+// without a history or report of its own; its figures and its positions at
+// t_end go to `run`.
+int study_run(const std::string& scene_path, const std::vector<SceneOverride>& overrides,
+              const std::string& label, bool quiet, std::ostream& err, StudyRun& run) {
+  std::unique_ptr<Scene> scene;
+  std::unique_ptr<Stepper> stepper;
+  const std::string problem = prepare_run(scene_path, overrides, scene, stepper);
+  if (!problem.empty()) {
+    // Checked before the study began: only a scene file changed since gets here.
+    run.ran = true;
+    run.status = problem;
+    return kExitRunFailed;
+  }
+  State state = initial_state(*scene->system);
+  RunInfo info = run_info(*scene);
+  int code = solve_statics(*scene, stepper, state, info);
+  Recorder recorder = make_recorder(*scene, state);
+  Progress progress(err, quiet, state.t, scene->time.t_end, label + " ");
+  if (code == kExitOk)
+    code = integrate_scene(*scene, *stepper, state, recorder, info,
+                           [&](const State&, const Sample& sample) {
+                             progress.update(sample, recorder.newton_iterations());
+                           });
+  progress.finish();
+  // The scene's [tolerances] judge runs at its own step: not checked here.
+  run.take(summarize(info, *scene->system, recorder));
+  const double t_end = scene->time.t_end;
+  if (code == kExitOk && std::abs(state.t - t_end) <= 1e-9 * std::max(1.0, std::abs(t_end)))
+    run.q_end = state.q;
+  return code;
+}
+
+std::string list_text(const std::vector<double>& values) {
+  std::string out;
+  for (double x : values) out += fmt::format("{}{:g}", out.empty() ? "" : ", ", x);
+  return out;
+}
+
+}  // namespace
+
+int command_study(const StudyOptions& options, std::ostream& out, std::ostream& err) {
+  const auto bad_input = [&err](const std::string& message) {
+    fmt::print(err, "emdae: error: {}\n", message);
+    return kExitBadInput;
+  };
+  // Everything is checked before anything runs or is written: the scene, the
+  // lists, and every run of the study as its scene and stepper.
+  std::vector<SceneOverride> base;
+  for (const auto& a : options.overrides) base.push_back({a, ""});
+  if (!options.t_end.empty())
+    base.push_back({"time.t_end=" + options.t_end, "--t-end " + options.t_end});
+  std::unique_ptr<Scene> scene;
+  try {
+    scene = load(options.scene_path, base);
+  } catch (const SceneError& e) {
+    return bad_input(e.what());
+  }
+  std::string problem;
+  const std::vector<std::string> schemes = parse_schemes(options.schemes, problem);
+  if (!problem.empty()) return bad_input(problem);
+  const bool has_ida = std::find(schemes.begin(), schemes.end(), "ida") != schemes.end();
+  const bool has_steps =
+      std::any_of(schemes.begin(), schemes.end(), [](const std::string& s) { return s != "ida"; });
+  const double scene_dt = scene->time.dt;
+  std::vector<double> dts = {4 * scene_dt, 2 * scene_dt, scene_dt, scene_dt / 2};
+  if (options.dts) {
+    dts = parse_values("--dts", *options.dts, "step size", std::numeric_limits<double>::infinity(),
+                       problem);
+    if (!problem.empty()) return bad_input(problem);
+  }
+  std::vector<double> tols = {1e-4, 1e-6, 1e-8};
+  if (options.tols) {
+    tols = parse_values("--tols", *options.tols, "tolerance", 1.0, problem);
+    if (!problem.empty()) return bad_input(problem);
+  }
+  double reference_dt = dts.back() / 8;
+  std::string reference_text = fmt::format("{:g}", reference_dt);
+  if (!options.reference_dt.empty()) {
+    const auto x = parse_number(options.reference_dt);
+    if (!x || !(*x > 0))
+      return bad_input(fmt::format("--reference-dt: must be a positive number, received '{}'",
+                                   options.reference_dt));
+    reference_dt = *x;
+    reference_text = options.reference_dt;
+  }
+  if (has_steps && !(reference_dt < dts.back()))
+    return bad_input(fmt::format(
+        "--reference-dt: must be smaller than the smallest step of --dts ({:g}), received {}",
+        dts.back(), reference_text));
+
+  // The plan: the reference first, then scheme by scheme from the largest
+  // step (loosest tolerance) down. Each run's values are scene overrides
+  // named after the option that gave them, so the scene parser checks them
+  // (a step below the scene's min_dt, ...) and names them in its messages.
+  struct Planned {
+    StudyRun run;
+    std::vector<SceneOverride> overrides;
+    std::string label;
+  };
+  std::vector<Planned> plan;
+  const auto value = [](double x) { return fmt::format("{}", x); };
+  {
+    Planned p{{}, base, fmt::format("reference em dt {}", reference_text)};
+    p.run.scheme = "em";
+    p.run.dt = reference_dt;
+    p.run.reference = true;
+    p.overrides.push_back({"scheme.name=em", "--reference-dt " + reference_text + " (scheme em)"});
+    p.overrides.push_back({"time.dt=" + value(reference_dt), "--reference-dt " + reference_text});
+    plan.push_back(std::move(p));
+  }
+  for (const auto& scheme : schemes) {
+    for (double x : scheme == "ida" ? tols : dts) {
+      const bool ida = scheme == "ida";
+      Planned p{{}, base, fmt::format("{} {} {:g}", scheme, ida ? "tol" : "dt", x)};
+      p.run.scheme = scheme;
+      p.run.dt = ida ? scene_dt : x;
+      if (ida) p.run.tol = x;
+      p.overrides.push_back({"scheme.name=" + scheme, "--schemes " + scheme});
+      if (ida) {
+        p.overrides.push_back({"scheme.rtol=" + value(x), fmt::format("--tols {:g}", x)});
+        p.overrides.push_back({"scheme.atol=" + value(x), fmt::format("--tols {:g}", x)});
+      } else {
+        p.overrides.push_back({"time.dt=" + value(x), fmt::format("--dts {:g}", x)});
+      }
+      plan.push_back(std::move(p));
+    }
+  }
+  std::vector<std::string> warnings;
+  for (const auto& p : plan) {
+    std::unique_ptr<Scene> s;
+    std::unique_ptr<Stepper> stepper;
+    const std::string why = prepare_run(options.scene_path, p.overrides, s, stepper);
+    if (!why.empty()) return bad_input(p.label + ": " + why);
+    for (const auto& w : s->warnings)
+      if (std::find(warnings.begin(), warnings.end(), w) == warnings.end()) warnings.push_back(w);
+  }
+  if (options.dts && !has_steps)
+    warnings.push_back(
+        "--dts is not used: ida's runs go by --tols (its output interval is the "
+        "scene's dt)");
+  if (options.tols && !has_ida) warnings.push_back("--tols is not used: only ida runs by them");
+  for (const auto& w : warnings) fmt::print(err, "emdae: warning: {}\n", w);
+
+  const std::string dir =
+      options.out_dir.empty() ? "out/" + scene->name + "-study" : options.out_dir;
+  std::error_code ec;
+  fs::create_directories(dir, ec);
+  if (ec || !fs::is_directory(dir))
+    return bad_input(fmt::format("cannot create output folder '{}': {}", dir,
+                                 ec ? ec.message() : "exists and is not a folder"));
+
+  Study study;
+  study.scene = scene->name;
+  study.description = scene->description;
+  study.source = scene->source_path;
+  study.dimension = scene->dimension;
+  study.t_end = scene->time.t_end;
+  study.size = bounding_box_diagonal(scene->system->initial_positions(), scene->dimension);
+  study.contact = !scene->contacts.empty();
+  study.schemes = schemes;
+  if (has_steps) study.dts = dts;
+  if (has_ida) study.tols = tols;
+  study.reference = plan.front().run;
+  for (std::size_t i = 1; i < plan.size(); ++i) study.runs.push_back(plan[i].run);
+
+  ReportInfo info = report_info(*scene);
+  info.scheme.clear();
+  // What the study varies is listed by itself, not as the scene's values.
+  info.settings.erase(std::remove_if(info.settings.begin(), info.settings.end(),
+                                     [](const auto& kv) {
+                                       return kv.first == "time step dt" ||
+                                              kv.first == "IDA tolerances" ||
+                                              kv.first == "spectral radius at infinity";
+                                     }),
+                      info.settings.end());
+  std::vector<std::pair<std::string, std::string>> varied;
+  std::string scheme_list;
+  for (const auto& s : schemes) scheme_list += (scheme_list.empty() ? "" : ", ") + s;
+  varied.emplace_back("schemes", scheme_list);
+  if (has_steps) varied.emplace_back("step sizes", list_text(dts));
+  if (has_ida)
+    varied.emplace_back("IDA tolerances (rtol = atol)",
+                        fmt::format("{}; output every {:g}", list_text(tols), scene_dt));
+  if (std::find(schemes.begin(), schemes.end(), "galpha") != schemes.end())
+    varied.emplace_back("galpha spectral radius at infinity",
+                        fmt::format("{}", scene->scheme_settings.rho_inf));
+  varied.emplace_back("reference", fmt::format("scheme em, dt = {:g}", reference_dt));
+  info.settings.insert(info.settings.begin(), varied.begin(), varied.end());
+  scene.reset();  // each run loads its own
+
+  // The runs, one after the other; the tables are rewritten after each, so
+  // that an interrupted or crashed study keeps what it did.
+  int exit_code = kExitOk;
+  bool interrupted = false;
+  try {
+    for (std::size_t i = 0; i < plan.size(); ++i) {
+      StudyRun& run = i == 0 ? study.reference : study.runs[i - 1];
+      const int code =
+          study_run(options.scene_path, plan[i].overrides, plan[i].label, options.quiet, err, run);
+      if (!options.quiet)
+        fmt::print(err, "emdae: {}: {} ({} steps, {:.3f} s)\n", plan[i].label, run.status,
+                   run.steps, run.cpu_seconds);
+      else if (!run.ok())
+        fmt::print(err, "emdae: {}: {}\n", plan[i].label, run.status);
+      evaluate_study(study);
+      write_study_tables(dir, study);
+      if (code == kExitInterrupted) {
+        interrupted = true;
+        break;
+      }
+      exit_code = worse(exit_code, code);
+    }
+    study.complete = !interrupted;
+    write_study_tables(dir, study);
+    write_study_report(dir, info, study);
+  } catch (const std::exception& e) {
+    fmt::print(err, "emdae: error: {}\n", e.what());
+    return kExitInternal;
+  }
+  if (!options.quiet || exit_code != kExitOk) {
+    print_study_table(out, study);
+    fmt::print(out, "  output: {}/{{study.csv,study.json,study.html}}\n", dir);
+  }
+  return interrupted ? kExitInterrupted : exit_code;
 }
 
 int emdae_main(int argc, char** argv) {
@@ -839,6 +1167,60 @@ int emdae_main(int argc, char** argv) {
                   "\n\ncompare exits with the worst code of its runs; a scheme that refuses "
                   "the scene\ncounts as a failed run (3).");
 
+  StudyOptions study_options;
+  std::string study_dts, study_tols;
+  CLI::App* study = app.add_subcommand(
+      "study",
+      "Convergence and work-precision study: run one scene with each scheme at each step size "
+      "(ida: at each tolerance) and compare its state at t_end with a reference run (scheme em "
+      "at a much smaller step); write DIR/study.csv, study.json and study.html (error against "
+      "step size, error against CPU time) and print the table.");
+  study->add_option("scene", study_options.scene_path, "Scene file (TOML)")
+      ->required()
+      ->type_name("FILE");
+  study
+      ->add_option("--schemes", study_options.schemes,
+                   "Comma-separated schemes to study (known: " + known + ")")
+      ->required()
+      ->type_name("A,B,...");
+  CLI::Option* dts_option =
+      study
+          ->add_option("--dts", study_dts,
+                       "Comma-separated step sizes of em, midpoint and galpha (default: the "
+                       "scene's dt x 4, 2, 1, 1/2)")
+          ->type_name("H,H,...");
+  CLI::Option* tols_option =
+      study
+          ->add_option("--tols", study_tols,
+                       "Comma-separated tolerances of ida, rtol = atol, each in (0, 1); its "
+                       "output interval is the scene's dt (default: 1e-4,1e-6,1e-8)")
+          ->type_name("TOL,...");
+  study
+      ->add_option("--reference-dt", study_options.reference_dt,
+                   "Step of the reference run, scheme em (default: the smallest of --dts / 8)")
+      ->type_name("H");
+  study->add_option("--t-end", study_options.t_end, "End time, overriding the scene's time.t_end")
+      ->type_name("T");
+  study
+      ->add_option("--out", study_options.out_dir,
+                   "Output folder (default: out/<scene name>-study)")
+      ->type_name("DIR");
+  study->add_option("--set", study_options.overrides, "Override a scene value (as for run)")
+      ->allow_extra_args(false)
+      ->type_name("KEY=VALUE");
+  study->add_flag("-q,--quiet", study_options.quiet, "No progress lines and no table");
+  study->footer(
+      std::string(kExitCodesHelp) +
+      "\n\n"
+      "study: a run's error is max over the nodes of |q - q_ref| at t_end (also relative\n"
+      "to the diagonal of the scene's bounding box). The reference is the same scene, so\n"
+      "the same discretization in space: the error is that of the time discretization\n"
+      "only. Observed order between successive steps h1 > h2: log(e1/e2) / log(h1/h2);\n"
+      "through contact impacts it is not expected to be 2. Every run is checked before\n"
+      "the first starts (bad input: 2, nothing written). A run that fails is recorded\n"
+      "and the others still run; the exit code is then 3 (study.csv and study.json are\n"
+      "rewritten after every run). The scene's [tolerances] are not checked.");
+
   std::string check_path;
   std::vector<std::string> check_overrides;
   CLI::App* check = app.add_subcommand(
@@ -861,6 +1243,11 @@ int emdae_main(int argc, char** argv) {
     if (*run) return command_run(run_options, std::cout, std::cerr);
     if (*check) return command_check(check_path, check_overrides, std::cout, std::cerr);
     if (*compare) return command_compare(compare_options, std::cout, std::cerr);
+    if (*study) {
+      if (dts_option->count() > 0) study_options.dts = study_dts;
+      if (tols_option->count() > 0) study_options.tols = study_tols;
+      return command_study(study_options, std::cout, std::cerr);
+    }
     RunOptions defaults;
     defaults.scheme = "em";
     defaults.out_dir = "out/default";

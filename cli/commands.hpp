@@ -4,12 +4,17 @@
 //   emdae run SCENE ...     run one scene with one scheme, write history and summary
 //   emdae compare SCENE --schemes em,midpoint ...
 //                           run the scene with each scheme, write compare.html
+//   emdae study SCENE --schemes em,midpoint,ida [--dts ...] [--tols ...] ...
+//                           run the scene per scheme over step sizes (ida: over
+//                           tolerances) against a fine reference; write
+//                           study.csv, study.json, study.html
 //   emdae check SCENE ...   validate a scene and show what would be built
 //
 // Every scene and command-line problem is found before any output is created.
 #pragma once
 
 #include <iosfwd>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -45,6 +50,18 @@ struct CompareOptions {
   bool quiet = false;
 };
 
+struct StudyOptions {
+  std::string scene_path;
+  std::string schemes;              // "em,midpoint,ida"
+  std::optional<std::string> dts;   // "0.04,0.02"; default: the scene's dt x 4, 2, 1, 1/2
+  std::optional<std::string> tols;  // ida's rtol = atol; default: 1e-4, 1e-6, 1e-8
+  std::string t_end;
+  std::string reference_dt;  // scheme em; default: the smallest of dts / 8
+  std::string out_dir;       // empty: out/<scene name>-study
+  std::vector<std::string> overrides;
+  bool quiet = false;
+};
+
 int command_run(const RunOptions& options, std::ostream& out, std::ostream& err);
 
 /// Runs the scene once per scheme into DIR/<scheme>/ (each with its report)
@@ -52,6 +69,15 @@ int command_run(const RunOptions& options, std::ostream& out, std::ostream& err)
 /// that refuses the scene counts as a failed run, 3); bad input (scene,
 /// unknown scheme name) is 2 before anything runs.
 int command_compare(const CompareOptions& options, std::ostream& out, std::ostream& err);
+
+/// Runs the scene with scheme em at the reference step, then with each
+/// scheme at each step size (ida at each tolerance), and writes DIR/study.csv,
+/// study.json (rewritten after every run) and study.html (verify/study.hpp).
+/// Every run is checked (scene and stepper) before the first one starts: bad
+/// input is 2 with nothing written. A run that fails is recorded and the
+/// others still run; exit code: the worst of the runs (3 for a failure; the
+/// scene's [tolerances] are not checked), 130 when interrupted.
+int command_study(const StudyOptions& options, std::ostream& out, std::ostream& err);
 
 int command_check(const std::string& scene_path, const std::vector<std::string>& overrides,
                   std::ostream& out, std::ostream& err);

@@ -21,11 +21,15 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "verify/page.hpp"
+
 extern char** environ;
 
 namespace emdae {
 
-namespace {
+// Not an anonymous namespace: verify/page.hpp declares the helpers that the
+// study page (study.cpp) shares; the rest are this file's own.
+namespace report_detail {
 
 namespace fs = std::filesystem;
 using Json = nlohmann::ordered_json;
@@ -226,22 +230,7 @@ Table read_history(const fs::path& path) {
 
 // --- what is plotted ----------------------------------------------------------------
 
-struct Series {
-  std::string label;
-  std::vector<double> t, y;
-};
-
-enum class Axis { Linear, Log, Steps };
-
-struct Figure {
-  std::string id;  // anchor and SVG id prefix
-  std::string title, ylabel;
-  Axis axis = Axis::Log;
-  std::vector<Series> series;
-  std::optional<double> limit;  // a tolerance, drawn as a dashed line
-  std::string caption;
-  std::string note;  // shown instead of a plot when there is nothing to draw
-};
+// Series, Axis and Figure: verify/page.hpp.
 
 // One run's curves, derived from its history as the recorder derives the
 // summary's maxima, so that a plot's peak is the summary's figure.
@@ -384,7 +373,7 @@ Series reduce(const Series& s, bool keep_max) {
   const std::size_t n = s.t.size();
   if (n <= kMaxPoints) return s;
   const std::size_t k = (n + kMaxPoints - 1) / kMaxPoints;
-  Series r{s.label, {}, {}};
+  Series r{s.label, {}, {}, s.dashed};
   for (std::size_t b = 0; b < n; b += k) {
     const std::size_t e = std::min(n, b + k);
     double y = s.y[b];
@@ -460,6 +449,22 @@ double log_floor(const Figure& fig) {
   return std::pow(10.0, std::floor(std::log10(lo)) - 1);
 }
 
+// A log x axis over less than a few decades gets gnuplot's decade tics
+// only, often a single one: label 1, 2 and 5 times the powers of ten.
+std::string log_x_tics(const Figure& fig, double lo, double hi) {
+  if (!fig.log_x) return {};
+  std::string out = "set logscale x 10\n";
+  if (hi > 1000 * lo) return out + "set format x '10^{%L}'\n";
+  std::string tics;
+  for (int e = static_cast<int>(std::floor(std::log10(lo))); e <= std::ceil(std::log10(hi)); ++e)
+    for (double m : {1.0, 2.0, 5.0}) {
+      const double x = m * std::pow(10.0, e);
+      if (x >= lo && x <= hi)
+        tics += fmt::format("{}'{:g}' {:.17g}", tics.empty() ? "" : ", ", x, x);
+    }
+  return out + "set xtics (" + tics + ")\n";
+}
+
 Plot draw(const Figure& fig, const ScratchFolder& scratch) {
   Plot plot;
   const bool log = fig.axis == Axis::Log;
@@ -467,11 +472,13 @@ Plot draw(const Figure& fig, const ScratchFolder& scratch) {
   double t_lo = std::numeric_limits<double>::infinity(), t_hi = -t_lo;
   double y_lo = t_lo, y_hi = -t_lo;
   std::string plots;
+  std::size_t colour = 0;  // guides take none: a scheme keeps its colour across figures
   for (std::size_t k = 0; k < fig.series.size(); ++k) {
     const Series s = reduce(fig.series[k], fig.axis != Axis::Linear);
     const std::string data_name = fmt::format("{}-{}.dat", fig.id, k);
     std::ofstream data(scratch / data_name);
     for (std::size_t i = 0; i < s.t.size(); ++i) {
+      if (fig.log_x && !(finite(s.t[i]) && s.t[i] > 0)) continue;
       double y = s.y[i];
       if (log && finite(y) && y < floor) y = floor;
       // Gnuplot reads NaN as a gap in the line; it would refuse "inf".
@@ -486,10 +493,19 @@ Plot draw(const Figure& fig, const ScratchFolder& scratch) {
       y_hi = std::max(y_hi, y);
     }
     if (!data) return {"", "cannot write gnuplot data to the scratch folder"};
-    plots += fmt::format("{}{} using 1:2 with {} lw 1.6 lc rgb '{}' title {} noenhanced",
-                         plots.empty() ? "" : ", ", gp_quote((scratch / data_name).string()),
-                         fig.axis == Axis::Steps ? "steps" : "lines",
-                         kColours[k % std::size(kColours)], gp_quote(s.label));
+    const std::string style = s.dashed ? "lines dt 2 lw 1.2 lc rgb '#555555'"
+                                       : fmt::format("{} lw 1.6 lc rgb '{}'",
+                                                     fig.axis == Axis::Steps ? "steps"
+                                                     : fig.points ? "linespoints pt 7 ps 0.7"
+                                                                  : "lines",
+                                                     kColours[colour++ % std::size(kColours)]);
+    plots += fmt::format("{}{} using 1:2 with {} title {} noenhanced", plots.empty() ? "" : ", ",
+                         gp_quote((scratch / data_name).string()), style, gp_quote(s.label));
+  }
+  // A log x axis (a study's step sizes) can show a single run: one point.
+  if (fig.log_x && t_hi >= t_lo) {
+    t_lo /= 1.3;
+    t_hi *= 1.3;
   }
   if (!(t_hi > t_lo)) return {"", "no finite values at two or more times: nothing to draw"};
   if (fig.limit) {
@@ -526,13 +542,13 @@ Plot draw(const Figure& fig, const ScratchFolder& scratch) {
            << "set terminal svg size 640,330 dynamic enhanced font 'DejaVu Sans,11' "
               "background '#ffffff'\n"
            << "set output " << gp_quote(svg_path.string()) << "\n"
-           << "set xlabel 't'\n"
+           << "set xlabel " << gp_quote(fig.xlabel) << "\n"
            << "set ylabel " << gp_quote(fig.ylabel) << "\n"
            << "set border 3 lc rgb '#444444'\nset tics nomirror\n"
            << "set grid lc rgb '#dddddd' lt 1 dt 1\n"
            << "set key outside top center horizontal noenhanced\n"
-           << fmt::format("set xrange [{:.17g}:{:.17g}]\n", t_lo, t_hi) << range << "plot " << plots
-           << "\n";
+           << fmt::format("set xrange [{:.17g}:{:.17g}]\n", t_lo, t_hi)
+           << log_x_tics(fig, t_lo, t_hi) << range << "plot " << plots << "\n";
     if (!script) return {"", "cannot write the gnuplot script to the scratch folder"};
   }
   std::string why;
@@ -625,13 +641,15 @@ std::string mark(const std::string& result) {
   return "<span class=\"mark skipped\">&ndash; skipped</span>";
 }
 
-std::string figures_html(const std::vector<Figure>& figures, const GnuplotStatus& gnuplot) {
+std::string figures_html(const std::vector<Figure>& figures, const GnuplotStatus& gnuplot,
+                         const std::string& data_file) {
   std::string out;
   if (!gnuplot.available)
     out += "<p class=\"warning\">No plots: gnuplot is not available (" +
            html_escape(gnuplot.detail) +
            "). Install it (Debian: <code>apt-get install gnuplot-nox</code>) and run again; "
-           "the data are in history.csv.</p>\n";
+           "the data are in " +
+           html_escape(data_file) + ".</p>\n";
   out += "<div class=\"figures\">\n";
   std::optional<ScratchFolder> scratch;
   std::string scratch_error;
@@ -889,7 +907,9 @@ std::string header_html(const ReportInfo& info, const std::string& what) {
   return out;
 }
 
-}  // namespace
+}  // namespace report_detail
+
+using namespace report_detail;
 
 GnuplotStatus probe_gnuplot() {
   GnuplotStatus status;

@@ -1,0 +1,117 @@
+// Convergence and work-precision studies of one scene (`emdae study`).
+//
+// A study runs a scene with several schemes over a range of step sizes (and
+// IDA over a range of tolerances rtol = atol, with the scene's dt as its
+// output interval) and compares each run's state at t_end with a reference
+// run: the same scene with scheme em at a much smaller step. The reference
+// is the same discretization in space (same particles, mesh, contact), so
+// the error measured is the error of the time discretization alone:
+//
+//   error      = max over nodes (particles and FE nodes) of |q(t_end) - q_ref(t_end)|
+//   error_rel  = error / the scene's size (the bounding-box diagonal of the
+//                reference configuration, i.e. the initial positions)
+//   order      = log(e_i / e_i+1) / log(h_i / h_i+1) between successive step
+//                sizes h_i > h_i+1 of a scheme (for ida: successive
+//                tolerances, so that 1 means error proportional to tol)
+//
+// Beside the error each run keeps what the run's summary says of it (steps,
+// Newton or IDA iterations, CPU seconds of the integration, the maximal
+// relative energy error and the momentum errors) and its status.
+//
+// This file holds the figures and the files of a study (study.csv,
+// study.json, study.html); the runs themselves are made by the emdae
+// command (cli/commands.cpp) with the code path of `emdae run`.
+#pragma once
+
+#include <iosfwd>
+#include <limits>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "core/system.hpp"
+#include "verify/report.hpp"
+#include "verify/summary.hpp"
+
+namespace emdae {
+
+/// One run of a study and what it gave.
+struct StudyRun {
+  std::string scheme;
+  double dt = 0.0;                 // the step; for ida its output interval
+  std::optional<double> tol;       // ida: rtol = atol
+  bool reference = false;          // the reference run (em at the reference step)
+  bool ran = false;                // false: not run (the study was interrupted)
+  std::string status = "not run";  // "ok" or what failed
+  long steps = 0;
+  long iterations = 0;  // Newton iterations; IDA's nonlinear iterations
+  double cpu_seconds = 0.0;
+  double energy_rel_error_max = std::numeric_limits<double>::quiet_NaN();
+  std::optional<double> linear_momentum_error_max, angular_momentum_rel_error_max;
+  double constraint_residual_max = std::numeric_limits<double>::quiet_NaN();
+  Vec q_end;  // positions at t_end; empty when the run did not get there
+
+  // From evaluate_study():
+  double error = std::numeric_limits<double>::quiet_NaN();
+  double error_rel = std::numeric_limits<double>::quiet_NaN();
+  std::optional<double> order;  // against the previous run of the scheme
+
+  bool ok() const { return status == "ok"; }
+  /// The value the run is varied by: dt, or ida's tolerance.
+  double axis() const { return tol ? *tol : dt; }
+  /// Takes the figures of the run's summary.
+  void take(const Summary& summary);
+};
+
+struct Study {
+  std::string scene, description, source;
+  int dimension = 2;
+  double t_end = 0.0;
+  double size = 0.0;     // bounding-box diagonal of the initial positions
+  bool contact = false;  // the scene has contact pairs
+  std::vector<std::string> schemes;
+  std::vector<double> dts, tols;  // as run: largest step (loosest tolerance) first
+  StudyRun reference;
+  /// Scheme by scheme in the order of `schemes`, each from its largest step
+  /// (loosest tolerance) down.
+  std::vector<StudyRun> runs;
+  bool complete = false;  // every run was made (not interrupted)
+
+  /// What a reader must know to read the figures (space vs time error; what
+  /// impacts do to orders).
+  std::vector<std::string> notes() const;
+  /// The reference's own error, from em's finest run e(h) = C (h^2 - h_ref^2)
+  /// as C h_ref^2, assuming order 2; empty with contact or without such a run.
+  std::optional<double> reference_error_estimate() const;
+};
+
+/// max over nodes of |a_node - b_node| (nodes of `dimension` coordinates).
+double max_node_distance(const Vec& a, const Vec& b, int dimension);
+/// Diagonal of the axis-aligned bounding box of the nodes in q.
+double bounding_box_diagonal(const Vec& q, int dimension);
+/// log(e1 / e2) / log(h1 / h2); empty unless both errors are finite and
+/// positive and h1 != h2.
+std::optional<double> observed_order(double e1, double e2, double h1, double h2);
+
+/// Errors against the reference and observed orders of every run (runs
+/// without a final state, or all of them without a reference, get none).
+void evaluate_study(Study& study);
+
+/// One row per run (the study's runs, then the reference).
+std::string study_csv(const Study& study);
+nlohmann::ordered_json to_json(const Study& study);
+/// The table printed by `emdae study`.
+void print_study_table(std::ostream& out, const Study& study);
+
+/// Writes `dir`/study.csv and `dir`/study.json atomically (after every run,
+/// so that an interrupted study keeps what it did).
+void write_study_tables(const std::string& dir, const Study& study);
+/// Writes `dir`/study.html: error against step size (one line per scheme;
+/// ida against its tolerance in a figure of its own), error against CPU
+/// time (every scheme: the work-precision diagram) and the table. `info`
+/// gives the title block and the settings. Throws std::runtime_error when
+/// the page cannot be written; a missing gnuplot only shows in the page.
+void write_study_report(const std::string& dir, const ReportInfo& info, const Study& study);
+
+}  // namespace emdae
