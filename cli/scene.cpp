@@ -496,7 +496,7 @@ void Builder::parse_time(const Fields& f) {
 
 void Builder::parse_scheme(const Fields& f) {
   f.only({"name", "newton_tolerance", "newton_max_iterations", "line_search", "rtol", "atol",
-          "rho_inf", "locate_impacts", "gap_tolerance"});
+          "max_order", "rho_inf", "locate_impacts", "gap_tolerance"});
   if (const auto name = f.optional_string("name")) {
     const auto known = known_schemes();
     if (std::find(known.begin(), known.end(), *name) == known.end()) {
@@ -517,6 +517,13 @@ void Builder::parse_scheme(const Fields& f) {
   ss.atol = f.optional_positive("atol").value_or(ss.atol);
   only_for("rtol", "ida");
   only_for("atol", "ida");
+  if (f.has("max_order")) {
+    const long order = f.integer("max_order", ss.max_order);
+    if (order < 1 || order > 5)
+      f.fail_key("max_order", "must be 1..5 (BDF orders), received " + std::to_string(order));
+    ss.max_order = static_cast<int>(order);
+  }
+  only_for("max_order", "ida");
   if (const auto rho = f.optional_number("rho_inf")) {
     if (*rho < 0 || *rho > 1)
       f.fail_key("rho_inf", "must be in [0, 1], received " + show(*f.find("rho_inf")));

@@ -48,6 +48,7 @@ std::unique_ptr<Stepper> make_stepper(const std::string& name, const System& sys
     IdaSettings ida;
     ida.rtol = scheme.rtol;
     ida.atol = scheme.atol;
+    ida.max_order = scheme.max_order;
     ida.gap_tolerance = scheme.gap_tolerance;
     return std::make_unique<IdaStepper>(system, ida);
   }

@@ -68,6 +68,7 @@ std::vector<std::string> known_schemes();
 /// (on q and v), generalized-alpha's spectral radius at infinity.
 struct SchemeSettings {
   double rtol = 1e-8, atol = 1e-8;  // "ida"
+  int max_order = 5;                // "ida": highest BDF order, 1..5
   double rho_inf = 1.0;             // "galpha", in [0, 1]
   // Contact ("em", "midpoint"): locate each impact and end a sub-step there
   // so that a node enters contact with a closed gap (energy treatment), and
