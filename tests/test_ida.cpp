@@ -303,6 +303,16 @@ TEST(MakeStepper, BuildsIdaAndGeneralizedAlpha) {
     EXPECT_TRUE(stepper->step(st, 0.01).converged) << name;
     EXPECT_NEAR(st.t, 0.01, 1e-15);
   }
+  // The scheme settings reach IDA (the scene's scheme.rtol, atol, max_order).
+  SchemeSettings capped;
+  capped.rtol = 1e-5;
+  capped.atol = 1e-6;
+  capped.max_order = 2;
+  auto ida = make_stepper("ida", *s, NewtonSettings{}, capped);
+  const IdaSettings& set = dynamic_cast<const IdaStepper&>(*ida).settings();
+  EXPECT_EQ(set.rtol, 1e-5);
+  EXPECT_EQ(set.atol, 1e-6);
+  EXPECT_EQ(set.max_order, 2);
   try {
     make_stepper("rk4", *s, NewtonSettings{});
     FAIL() << "an unknown scheme must throw";
