@@ -27,9 +27,11 @@
 
 #include "cli/default_scene.hpp"
 #include "cli/scene.hpp"
+#include "contact/mortar_contact.hpp"
 #include "integrators/driver.hpp"
 #include "integrators/statics.hpp"
 #include "integrators/stepper.hpp"
+#include "verify/contact_pressure.hpp"
 #include "verify/history.hpp"
 #include "verify/recorder.hpp"
 #include "verify/report.hpp"
@@ -124,61 +126,84 @@ std::string maybe(const std::optional<double>& x, const std::string& note) {
   return x ? fmt::format("{:.3e}", *x) : note;
 }
 
-void print_summary(std::ostream& out, const Summary& s, const std::string& dir,
-                   bool fields = false) {
-  const auto row = [&out](const char* label, const std::string& value) {
+std::string statics_text(const StaticsOutcome& st) {
+  std::string moments;
+  for (std::size_t k = 0; k < st.holding_moments.size(); ++k)
+    moments += fmt::format("{}{} {:.4g}", k ? ", " : "; holding moment of ", st.holds[k],
+                           st.holding_moments[k]);
+  return fmt::format("{} ({} pseudo steps, {} Newton iterations, {} active contacts{})", st.message,
+                     st.steps, st.newton_iterations, st.active_contacts, moments);
+}
+
+// "12 active nodes, normal force 4.75, pressure 0.1 .. 28 (mean 14, spread 2.0)"
+std::string pressure_text(const PairPressure& p) {
+  if (p.active_nodes == 0) return "no active node";
+  return fmt::format(
+      "{} active nodes, normal force {:.6g}, pressure {:.6g} .. {:.6g} (mean {:.6g}, "
+      "spread {})",
+      p.active_nodes, p.normal_force, *p.pressure_min, *p.pressure_max, *p.pressure_mean,
+      p.pressure_spread ? fmt::format("{:.3e}", *p.pressure_spread) : "-");
+}
+
+void print_summary(std::ostream& out, const Summary& s, const std::string& dir, bool fields = false,
+                   bool contact_table = false) {
+  const auto row = [&out](const std::string& label, const std::string& value) {
     // At least one space: "check angular_momentum_balance_rel" is longer than the column.
     fmt::print(out, "  {:<27} {}\n", label, value);
   };
   row("scene", s.scene + " (" + s.source + ")");
-  row("scheme", fmt::format("{}, dt = {}, t_end = {}", s.scheme, s.dt, s.t_end));
-  row("status", s.status);
-  row("steps",
-      fmt::format("{} to t = {} ({} Newton iterations, max {} per step, {} cut-backs)", s.steps,
-                  s.t_reached, s.newton_iterations, s.newton_iterations_max_per_step, s.cutbacks));
-  row("cpu time", fmt::format("{:.3f} s", s.cpu_seconds));
-  if (s.statics) {
-    const StaticsOutcome& st = *s.statics;
-    std::string moments;
-    for (std::size_t k = 0; k < st.holding_moments.size(); ++k)
-      moments += fmt::format("{}{} {:.4g}", k ? ", " : "; holding moment of ", st.holds[k],
-                             st.holding_moments[k]);
-    row("statics",
-        fmt::format("{} ({} pseudo steps, {} Newton iterations, {} active contacts{})", st.message,
-                    st.steps, st.newton_iterations, st.active_contacts, moments));
+  if (s.static_analysis) {
+    row("analysis", fmt::format("static, {} load increment{} to t = {}", s.increments,
+                                s.increments == 1 ? "" : "s", s.load_time));
+    row("status", s.status);
+    if (s.statics) row("statics", statics_text(*s.statics));
+    row("cpu time", fmt::format("{:.3f} s", s.cpu_seconds));
+    row("potential energy", fmt::format("{:.6g}", s.potential_energy));
+  } else {
+    row("scheme", fmt::format("{}, dt = {}, t_end = {}", s.scheme, s.dt, s.t_end));
+    row("status", s.status);
+    row("steps", fmt::format("{} to t = {} ({} Newton iterations, max {} per step, {} cut-backs)",
+                             s.steps, s.t_reached, s.newton_iterations,
+                             s.newton_iterations_max_per_step, s.cutbacks));
+    row("cpu time", fmt::format("{:.3f} s", s.cpu_seconds));
+    if (s.statics) row("statics", statics_text(*s.statics));
+    // With loads the energy error is that of the load-free intervals, and the
+    // balance H - H_0 = W is the figure for the rest.
+    const bool loaded = s.energy_balance_rel_error_max.has_value() && !s.energy_note.empty();
+    row(loaded ? "energy error (load-free)"
+               : (s.energy_error_relative ? "energy rel. error" : "energy abs. error"),
+        fmt::format("{:.3e}", s.energy_rel_error_max));
+    if (s.energy_balance_rel_error_max)
+      row("energy balance error", fmt::format("{:.3e} (external work {:.6g})",
+                                              *s.energy_balance_rel_error_max, s.external_work));
+    row("lin. momentum error", maybe(s.linear_momentum_error_max, s.linear_momentum_note));
+    if (!s.linear_momentum_error_max && s.linear_momentum_balance_error_max)
+      row("lin. momentum balance", fmt::format("{:.3e}", *s.linear_momentum_balance_error_max));
+    row("ang. momentum error", maybe(s.angular_momentum_rel_error_max, s.angular_momentum_note));
+    if (!s.angular_momentum_rel_error_max && s.angular_momentum_balance_rel_error_max)
+      row("ang. momentum balance",
+          fmt::format("{:.3e}", *s.angular_momentum_balance_rel_error_max));
   }
-  // With loads the energy error is that of the load-free intervals, and the
-  // balance H - H_0 = W is the figure for the rest.
-  const bool loaded = s.energy_balance_rel_error_max.has_value() && !s.energy_note.empty();
-  row(loaded ? "energy error (load-free)"
-             : (s.energy_error_relative ? "energy rel. error" : "energy abs. error"),
-      fmt::format("{:.3e}", s.energy_rel_error_max));
-  if (s.energy_balance_rel_error_max)
-    row("energy balance error", fmt::format("{:.3e} (external work {:.6g})",
-                                            *s.energy_balance_rel_error_max, s.external_work));
-  row("lin. momentum error", maybe(s.linear_momentum_error_max, s.linear_momentum_note));
-  if (!s.linear_momentum_error_max && s.linear_momentum_balance_error_max)
-    row("lin. momentum balance", fmt::format("{:.3e}", *s.linear_momentum_balance_error_max));
-  row("ang. momentum error", maybe(s.angular_momentum_rel_error_max, s.angular_momentum_note));
-  if (!s.angular_momentum_rel_error_max && s.angular_momentum_balance_rel_error_max)
-    row("ang. momentum balance", fmt::format("{:.3e}", *s.angular_momentum_balance_rel_error_max));
   row("max |Phi|", fmt::format("{:.3e}", s.constraint_residual_max));
   if (s.contact) {
     const ContactFigures& c = *s.contact;
-    row("contact", c.first ? fmt::format("from t = {:.4g} to {:.4g}, at most {} active, {} events",
-                                         *c.first, *c.last, c.active_contacts_max, c.contact_events)
-                           : std::string("none"));
+    if (!s.static_analysis)
+      row("contact", c.first
+                         ? fmt::format("from t = {:.4g} to {:.4g}, at most {} active, {} events",
+                                       *c.first, *c.last, c.active_contacts_max, c.contact_events)
+                         : std::string("none"));
     row("gap violation, penetration",
         fmt::format("{:.3e}, {:.3e}", c.gap_violation_max, c.penetration_max));
   }
+  for (const auto& p : s.contact_pressure) row("contact " + p.pair, pressure_text(p));
   for (const auto& c : s.checks) {
-    std::string verdict = "skipped: not conserved by this system";
+    std::string verdict = "skipped: " + c.note;
     if (c.result == "pass") verdict = fmt::format("pass: {:.3e} <= {}", *c.value, c.limit);
     if (c.result == "fail") verdict = fmt::format("FAIL: {:.3e} > {}", *c.value, c.limit);
-    row(("check " + c.name).c_str(), verdict);
+    row("check " + c.name, verdict);
   }
-  row("output",
-      dir + "/{history.csv,summary.json,report.html" + (fields ? ",fields.pvd" : "") + "}");
+  row("output", dir + "/{history.csv,summary.json,report.html" +
+                    (contact_table ? ",contact.csv" : "") + (fields ? ",fields.pvd" : "") + "}");
 }
 
 // Progress of a run on stderr. On a terminal: one line redrawn in place
@@ -293,7 +318,10 @@ int command_check(const std::string& scene_path, const std::vector<std::string>&
   };
   int fixed = 0;
   for (const auto& p : scene->particles) fixed += p.fixed ? 1 : 0;
-  const long steps = static_cast<long>(std::ceil(scene->time.t_end / scene->time.dt - 1e-9));
+  // A static analysis records one state per load increment.
+  const long steps = scene->static_only
+                         ? scene->statics.settings.increments
+                         : static_cast<long>(std::ceil(scene->time.t_end / scene->time.dt - 1e-9));
   const Conservation c = conservation_of(sys);
   fmt::print(out, "scene {} is valid\n", scene->source_path);
   row("name", scene->name);
@@ -330,11 +358,15 @@ int command_check(const std::string& scene_path, const std::vector<std::string>&
     const StaticSettings& st = scene->statics.settings;
     std::string holds;
     for (const auto& h : scene->statics.hold_names) holds += (holds.empty() ? "" : ", ") + h;
-    row("statics", fmt::format("equilibrium first (pseudo dt {}, tolerance {}, at most {} pseudo "
-                               "steps, Newton tolerance {}){}",
-                               st.pseudo_dt, st.tolerance, st.max_steps, st.newton.tolerance,
-                               holds.empty() ? "" : ", holding the rotation of " + holds));
+    row("statics",
+        fmt::format("{} ({} load increment{} to t = {}, pseudo dt {}, tolerance {}, at most {} "
+                    "pseudo steps each, Newton tolerance {}){}",
+                    scene->static_only ? "the equilibrium is the run" : "equilibrium first",
+                    st.increments, st.increments == 1 ? "" : "s", st.load_time.value_or(0.0),
+                    st.pseudo_dt, st.tolerance, st.max_steps, st.newton.tolerance,
+                    holds.empty() ? "" : ", holding the rotation of " + holds));
   }
+  if (scene->static_only) row("analysis", "static (no [time]): no time steps, no scheme");
   const SchemeSettings& ss = scene->scheme_settings;
   std::string own;
   if (scene->scheme == "ida") own = fmt::format(", rtol {}, atol {}", ss.rtol, ss.atol);
@@ -342,21 +374,28 @@ int command_check(const std::string& scene_path, const std::vector<std::string>&
   if (!scene->contacts.empty())
     own += fmt::format(", impacts {}", ss.locate_impacts ? "located" : "not located") +
            (ss.gap_tolerance > 0 ? fmt::format(", gap tolerance {}", ss.gap_tolerance) : "");
-  row("scheme", fmt::format("{} (Newton tolerance {}, at most {} iterations, line search {}{})",
-                            scene->scheme, scene->newton.tolerance, scene->newton.max_iterations,
-                            scene->newton.line_search ? "on" : "off", own));
-  row("time",
-      fmt::format("dt = {}, t_end = {} ({} steps), min_dt = {}", scene->time.dt, scene->time.t_end,
-                  steps,
-                  scene->time.min_dt > 0 ? fmt::format("{}", scene->time.min_dt) : "dt/1024"));
+  if (!scene->static_only) {
+    row("scheme", fmt::format("{} (Newton tolerance {}, at most {} iterations, line search {}{})",
+                              scene->scheme, scene->newton.tolerance, scene->newton.max_iterations,
+                              scene->newton.line_search ? "on" : "off", own));
+    row("time",
+        fmt::format("dt = {}, t_end = {} ({} steps), min_dt = {}", scene->time.dt,
+                    scene->time.t_end, steps,
+                    scene->time.min_dt > 0 ? fmt::format("{}", scene->time.min_dt) : "dt/1024"));
+  }
+  const char* unit = scene->static_only ? "increment" : "step";
   std::string fields;
   if (!scene->bodies.empty()) {
     const long every = vtu_interval(scene->output.vtu_every, steps);
-    fields = every == 0 ? ", no VTU fields" : fmt::format(", VTU fields every {} step(s)", every);
+    fields =
+        every == 0 ? ", no VTU fields" : fmt::format(", VTU fields every {} {}(s)", every, unit);
   }
-  row("output", fmt::format("history row every {} step(s){}", scene->output.every, fields));
-  row("lin. momentum", c.linear ? "conserved" : c.linear_reason);
-  row("ang. momentum", c.angular ? "conserved" : c.angular_reason);
+  row("output", fmt::format("history row every {} {}(s){}{}", scene->output.every, unit, fields,
+                            scene->contacts.empty() ? "" : ", contact.csv"));
+  if (!scene->static_only) {
+    row("lin. momentum", c.linear ? "conserved" : c.linear_reason);
+    row("ang. momentum", c.angular ? "conserved" : c.angular_reason);
+  }
   const Tolerances& t = scene->tolerances;
   std::string tol;
   const auto add = [&tol](const char* name, const std::optional<double>& x) {
@@ -370,6 +409,7 @@ int command_check(const std::string& scene_path, const std::vector<std::string>&
   add("constraint", t.constraint);
   add("gap_violation", t.gap_violation);
   add("penetration", t.penetration);
+  add("contact_pressure_spread", t.contact_pressure_spread);
   row("tolerances", tol.empty() ? "none" : tol);
   for (const auto& w : scene->warnings) fmt::print(err, "emdae: warning: {}\n", w);
   return kExitOk;
@@ -383,14 +423,8 @@ struct RunRecord {
   std::string message;  // why nothing was run (bad input), else empty
 };
 
-// The scheme and the settings that shape its results, for the report.
-ReportInfo report_info(const Scene& scene) {
-  ReportInfo r;
-  r.scene_name = scene.name;
-  r.description = scene.description;
-  r.source = scene.source_path;
-  r.scheme = scene.scheme;
-  auto& s = r.settings;
+// The time step and the scheme's settings, for the report of a dynamic run.
+void add_dynamic_settings(const Scene& scene, std::vector<std::pair<std::string, std::string>>& s) {
   s.emplace_back("time step dt", fmt::format("{}", scene.time.dt));
   s.emplace_back("end time", fmt::format("{}", scene.time.t_end));
   s.emplace_back("smallest cut-back step",
@@ -406,6 +440,38 @@ ReportInfo report_info(const Scene& scene) {
   if (!scene.contacts.empty())
     s.emplace_back("contact", fmt::format("{} pair(s), impacts {}located", scene.contacts.size(),
                                           scene.scheme_settings.locate_impacts ? "" : "not "));
+}
+
+// The scheme and the settings that shape its results, for the report.
+ReportInfo report_info(const Scene& scene) {
+  ReportInfo r;
+  r.scene_name = scene.name;
+  r.description = scene.description;
+  r.source = scene.source_path;
+  r.scheme = scene.static_only ? "static" : scene.scheme;
+  auto& s = r.settings;
+  if (scene.static_only) {
+    const StaticSettings& st = scene.statics.settings;
+    s.emplace_back("analysis", "static: the equilibrium is the whole run (no [time])");
+    s.emplace_back("load increments",
+                   fmt::format("{} to t = {}", st.increments, st.load_time.value_or(0.0)));
+    s.emplace_back("pseudo time step", fmt::format("{}", st.pseudo_dt));
+    s.emplace_back("converged when", fmt::format("max |q_k+1 - q_k| <= {}, at most {} pseudo "
+                                                 "steps per increment",
+                                                 st.tolerance, st.max_steps));
+    s.emplace_back("Newton", fmt::format("tolerance {}, at most {} iterations, line search {}",
+                                         st.newton.tolerance, st.newton.max_iterations,
+                                         st.newton.line_search ? "on" : "off"));
+    if (!scene.statics.hold_names.empty()) {
+      std::string holds;
+      for (const auto& h : scene.statics.hold_names) holds += (holds.empty() ? "" : ", ") + h;
+      s.emplace_back("rotation held", holds);
+    }
+    if (!scene.contacts.empty())
+      s.emplace_back("contact", fmt::format("{} pair(s)", scene.contacts.size()));
+  } else {
+    add_dynamic_settings(scene, s);
+  }
   const System& sys = *scene.system;
   s.emplace_back("system", fmt::format("{} nodes, {} dofs ({} prescribed), {} constraints, "
                                        "{} potential terms",
@@ -414,7 +480,8 @@ ReportInfo report_info(const Scene& scene) {
   for (const auto& b : scene.bodies) s.emplace_back("body " + b.name, b.mesh + "; " + b.material);
   for (const auto& l : scene.loads)
     s.emplace_back("load " + l.name, l.magnitude + " x " + l.time_function);
-  s.emplace_back("history", fmt::format("a row every {} step(s)", scene.output.every));
+  s.emplace_back("history", fmt::format("a row every {} {}(s)", scene.output.every,
+                                        scene.static_only ? "load increment" : "step"));
   return r;
 }
 
@@ -427,17 +494,58 @@ std::vector<VtuBody> vtu_bodies(const Scene& scene) {
   return bodies;
 }
 
+// The active slave nodes of the scene's contact pairs at `state`, with their
+// pressure: the rows of contact.csv (node: its index in the slave body's mesh).
+std::vector<ContactNode> contact_nodes(const Scene& scene, const State& state) {
+  std::vector<ContactNode> out;
+  for (const SlavePressure& p :
+       slave_pressures(*scene.system, state.q, state.lambda, state.active)) {
+    // The scene's contacts are the system's unilateral sets, in order.
+    if (p.set < 0 || p.set >= static_cast<int>(scene.contacts.size())) continue;
+    const SceneContact& pair = scene.contacts[static_cast<std::size_t>(p.set)];
+    const std::string body = pair.slave.substr(0, pair.slave.find('.'));
+    int offset = 0;
+    for (const auto& b : scene.bodies)
+      if (b.name == body) offset = b.node_offset;
+    const Eigen::Vector2d x = state.q.segment<2>(2 * p.node);
+    out.push_back({pair.name, p.node - offset, x.x(), x.y(), p.gap, p.pressure, p.weight, p.force});
+  }
+  return out;
+}
+
+std::vector<std::string> contact_names(const Scene& scene) {
+  std::vector<std::string> names;
+  for (const auto& c : scene.contacts) names.push_back(c.name);
+  return names;
+}
+
+// p_A at every slave node of the scene's contacts, zero elsewhere (summed
+// over the pairs a node is a slave of): the VTU point field.
+Vec contact_pressure_field(const System& system, const State& state) {
+  Vec p = Vec::Zero(system.n_nodes());
+  for (const SlavePressure& x : slave_pressures(system, state.q, state.lambda, state.active))
+    p[x.node] += x.pressure;
+  return p;
+}
+
 // VTU output of a run; a failure to write fields is reported once and ends
 // the field output, not the run (history and summary are what it is judged by).
 class FieldOutput {
  public:
   FieldOutput(const Scene& scene, const std::string& dir, std::ostream& err) : err_(err) {
-    const long steps = static_cast<long>(std::ceil(scene.time.t_end / scene.time.dt - 1e-9));
+    // A static analysis writes one file per load increment.
+    const long steps = scene.static_only
+                           ? scene.statics.settings.increments
+                           : static_cast<long>(std::ceil(scene.time.t_end / scene.time.dt - 1e-9));
     every_ = vtu_interval(scene.output.vtu_every, steps);
     auto bodies = vtu_bodies(scene);
     if (bodies.empty() || every_ == 0) return;
     try {
       writer_ = std::make_unique<FieldWriter>(dir, std::move(bodies), scene.dimension);
+      if (scene.system->n_unilateral() > 0)
+        writer_->add_point_scalar("contact_pressure", [&system = *scene.system](const State& s) {
+          return contact_pressure_field(system, s);
+        });
     } catch (const std::exception& e) {
       fail(e);
     }
@@ -483,6 +591,8 @@ std::string prepare_run(const std::string& scene_path, const std::vector<SceneOv
   } catch (const SceneError& e) {
     return e.what();
   }
+  // A static analysis has no scheme: the static solve makes its own steps.
+  if (scene->static_only) return {};
   // The scene parser refuses what a scheme cannot run; this is the last word.
   try {
     stepper = make_stepper(scene->scheme, *scene->system, scene->newton, scene->scheme_settings);
@@ -500,6 +610,12 @@ RunInfo run_info(const Scene& scene) {
   info.source = scene.source_path;
   info.dt = scene.time.dt;
   info.t_end = scene.time.t_end;
+  if (scene.static_only) {
+    info.scheme = "static";
+    info.static_analysis = true;
+    info.increments = scene.statics.settings.increments;
+    info.load_time = scene.statics.settings.load_time.value_or(0.0);
+  }
   return info;
 }
 
@@ -507,30 +623,32 @@ RunInfo run_info(const Scene& scene) {
 // from it, at rest, with its active contact set. Returns kExitOk, or
 // kExitRunFailed with info.status saying why.
 int solve_statics(const Scene& scene, std::unique_ptr<Stepper>& stepper, State& state,
-                  RunInfo& info) {
+                  RunInfo& info, const StaticObserver& on_increment = {}) {
   if (!scene.statics.enabled) return kExitOk;
   const double start = cpu_now();
   StaticResult r;
   try {
-    r = solve_static(*scene.system, state, scene.statics.settings, scene.statics.hold_rotation);
+    r = solve_static(*scene.system, state, scene.statics.settings, scene.statics.hold_rotation,
+                     on_increment);
   } catch (const std::exception& e) {
     r.message = std::string("static solve: ") + e.what();
   }
   StaticsOutcome st;
   st.converged = r.converged;
-  // solve_static counts one past max_steps when it runs out of them.
-  st.steps = std::min(r.steps, scene.statics.settings.max_steps);
+  st.steps = r.steps;  // over all load increments
   st.newton_iterations = r.newton_iterations;
   st.change = r.change;
   st.holds = scene.statics.hold_names;
   st.holding_moments = r.holding_moments;
+  st.increments = r.increments;
   st.active_contacts = static_cast<int>(state.active.size());
   st.cpu_seconds = cpu_now() - start;
   st.message = r.message;
   info.statics = st;
   // The solve added and removed its rotation holds: a stepper made before
-  // it must not carry anything over.
-  stepper = make_stepper(scene.scheme, *scene.system, scene.newton, scene.scheme_settings);
+  // it must not carry anything over (a static analysis has none).
+  if (stepper)
+    stepper = make_stepper(scene.scheme, *scene.system, scene.newton, scene.scheme_settings);
   if (r.converged) return kExitOk;
   info.status = r.message;
   return kExitRunFailed;
@@ -600,8 +718,11 @@ int run_scene(const RunOptions& options, std::ostream& out, std::ostream& err, R
   if (!problem.empty()) return bad_input(problem);
   const System& system = *scene->system;
 
-  const std::string dir =
-      options.out_dir.empty() ? "out/" + scene->name + "-" + scene->scheme : options.out_dir;
+  // A static analysis has no scheme: its folder is named after what it is.
+  const std::string dir = options.out_dir.empty()
+                              ? "out/" + scene->name + "-" +
+                                    (scene->static_only ? std::string("static") : scene->scheme)
+                              : options.out_dir;
   std::error_code ec;
   fs::create_directories(dir, ec);
   if (ec || !fs::is_directory(dir))
@@ -610,10 +731,15 @@ int run_scene(const RunOptions& options, std::ostream& out, std::ostream& err, R
   record.dir = dir;
   const std::string history_path = (fs::path(dir) / "history.csv").string();
   const std::string summary_path = (fs::path(dir) / "summary.json").string();
+  const std::string contact_path = (fs::path(dir) / "contact.csv").string();
 
   State state = initial_state(system);
+  // A static analysis starts at rest (prescribed motions have no velocity).
+  if (scene->static_only) state.v.setZero();
   RunInfo info = run_info(*scene);
-  int exit_code = solve_statics(*scene, stepper, state, info);
+  int exit_code = kExitOk;
+  // A dynamic run starts from the equilibrium of its [statics], at rest.
+  if (!scene->static_only) exit_code = solve_statics(*scene, stepper, state, info);
   Recorder recorder = make_recorder(*scene, state);
   std::unique_ptr<HistoryWriter> history;
   try {
@@ -626,39 +752,82 @@ int run_scene(const RunOptions& options, std::ostream& out, std::ostream& err, R
   FieldOutput fields(*scene, dir, err);
   fields.maybe_write(state, 0);
 
-  Progress progress(err, options.quiet, state.t, scene->time.t_end, options.progress_label);
   long last_written = 0;
-  // A failed static solve leaves nothing to integrate from.
-  if (exit_code == kExitOk)
-    exit_code = integrate_scene(*scene, *stepper, state, recorder, info,
-                                [&](const State& s, const Sample& sample) {
-                                  if (sample.step % scene->output.every == 0) {
-                                    history->write(sample);
-                                    last_written = sample.step;
-                                  }
-                                  fields.maybe_write(s, sample.step);
-                                  progress.update(sample, recorder.newton_iterations());
-                                });
-  progress.finish();
-  // The last state always ends the fields too.
-  fields.maybe_write(state, recorder.last().step, true);
+  // The contact table: the last state's, or for a static analysis the last
+  // equilibrium's (a failed increment leaves no pressure worth the name).
+  std::optional<std::vector<ContactNode>> contact;
+  std::string contact_problem;
+  const auto take_contact = [&](const State& s) {
+    if (scene->contacts.empty()) return;
+    try {
+      contact = contact_nodes(*scene, s);
+    } catch (const std::exception& e) {
+      contact_problem = e.what();
+    }
+  };
+  if (scene->static_only) {
+    // The static solve is the run: a history row and fields per load increment.
+    const int increments = scene->statics.settings.increments;
+    double t_previous = state.t;
+    if (!scene->contacts.empty()) contact.emplace();
+    exit_code = solve_statics(*scene, stepper, state, info,
+                              [&](const State& s, const StaticIncrement& inc) {
+                                AcceptedStep step;
+                                step.dt = inc.t - t_previous;
+                                t_previous = inc.t;
+                                step.stats.converged = true;
+                                step.stats.iterations = static_cast<int>(inc.newton_iterations);
+                                const Sample& sample = recorder.observe(s, step);
+                                const bool last = inc.index == increments;
+                                if (last || sample.step % scene->output.every == 0) {
+                                  history->write(sample);
+                                  last_written = sample.step;
+                                }
+                                fields.maybe_write(s, sample.step, last);
+                                take_contact(s);
+                              });
+    if (info.statics) info.cpu_seconds = info.statics->cpu_seconds;
+  } else {
+    Progress progress(err, options.quiet, state.t, scene->time.t_end, options.progress_label);
+    // A failed static solve leaves nothing to integrate from.
+    if (exit_code == kExitOk)
+      exit_code = integrate_scene(*scene, *stepper, state, recorder, info,
+                                  [&](const State& s, const Sample& sample) {
+                                    if (sample.step % scene->output.every == 0) {
+                                      history->write(sample);
+                                      last_written = sample.step;
+                                    }
+                                    fields.maybe_write(s, sample.step);
+                                    progress.update(sample, recorder.newton_iterations());
+                                  });
+    progress.finish();
+    // The last state always ends the fields too.
+    fields.maybe_write(state, recorder.last().step, true);
+    take_contact(state);
+  }
   fields.close();
+  if (!contact_problem.empty())
+    fmt::print(err, "emdae: warning: no contact pressure: {}\n", contact_problem);
+  if (contact) info.contact_pressure = pair_pressures(contact_names(*scene), *contact);
 
   try {
     // The last state always ends the history, whatever `every` is.
     if (recorder.last().step != last_written) history->write(recorder.last());
     history->close();
+    if (contact) write_contact_table(contact_path, *contact);
     const Summary summary = summarize(info, system, recorder, scene->tolerances);
     write_summary(summary_path, summary);
     try {
       ReportInfo report = report_info(*scene);
+      if (contact) report.files.push_back("contact.csv");
       if (fields.active()) report.files.push_back("fields.pvd");
       write_report(dir, report, summary);
     } catch (const std::exception& e) {
       // The run is judged by history and summary; a report is their view.
       fmt::print(err, "emdae: warning: no report: {}\n", e.what());
     }
-    if (!options.quiet || exit_code != kExitOk) print_summary(out, summary, dir, fields.active());
+    if (!options.quiet || exit_code != kExitOk)
+      print_summary(out, summary, dir, fields.active(), contact.has_value());
     if (exit_code == kExitOk && !summary.checks_pass()) {
       exit_code = kExitChecksFailed;
       for (const auto& c : summary.checks)
@@ -762,6 +931,15 @@ std::vector<double> parse_values(const std::string& option, const std::string& t
   return values;
 }
 
+// Why `compare` and `study` refuse a static analysis, naming the scene's
+// place as every scene error does.
+std::string static_scene_refused(const Scene& scene, const char* command) {
+  return fmt::format(
+      "{}:1:1: key 'time': missing: the scene is a static analysis ([statics] without [time]), "
+      "and {} runs time-stepping schemes; run it with 'emdae run', or add [time]",
+      scene.source_path, command);
+}
+
 }  // namespace
 
 int command_run(const RunOptions& options, std::ostream& out, std::ostream& err) {
@@ -782,6 +960,10 @@ int command_compare(const CompareOptions& options, std::ostream& out, std::ostre
     scene = load(options.scene_path, overrides);
   } catch (const SceneError& e) {
     fmt::print(err, "emdae: error: {}\n", e.what());
+    return kExitBadInput;
+  }
+  if (scene->static_only) {
+    fmt::print(err, "emdae: error: {}\n", static_scene_refused(*scene, "compare"));
     return kExitBadInput;
   }
   std::string problem;
@@ -927,6 +1109,7 @@ int command_study(const StudyOptions& options, std::ostream& out, std::ostream& 
   } catch (const SceneError& e) {
     return bad_input(e.what());
   }
+  if (scene->static_only) return bad_input(static_scene_refused(*scene, "study"));
   std::string problem;
   const std::vector<std::string> schemes = parse_schemes(options.schemes, problem);
   if (!problem.empty()) return bad_input(problem);

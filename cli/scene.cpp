@@ -414,6 +414,8 @@ class Builder {
   void parse_output(const Fields& f);
   void parse_tolerances(const Fields& f);
   void finish();
+  /// The scene has [statics] and no [time]: a static analysis.
+  void set_static_only() { scene_.static_only = true; }
 
  private:
   System& system() { return *scene_.system; }
@@ -455,7 +457,8 @@ class Builder {
   // Prescribed dofs: which [[dirichlet]] entry set them, and whether it fixed them.
   std::map<int, std::pair<std::string, bool>> prescribed_by_;
   std::vector<std::string> contact_names_, load_names_;
-  // Where things were declared that some schemes cannot run.
+  // Where scheme.name was given (a static analysis does not use it).
+  std::string scheme_name_where_;
 };
 
 void Builder::parse_scene(const Fields& f) {
@@ -504,6 +507,7 @@ void Builder::parse_scheme(const Fields& f) {
                              hint(*name, known, "known schemes"));
     }
     scene_.scheme = *name;
+    scheme_name_where_ = f.where(*f.find("name"));
   }
   SchemeSettings& ss = scene_.scheme_settings;
   // Settings of one scheme given for another do nothing: say so, since a
@@ -717,7 +721,7 @@ Mesh Builder::mesh(const Fields& f, std::string* text) const {
                      static_cast<int>(through));
   }
   if (type == "rectangle") {
-    m.only({"type", "origin", "width", "height", "nx", "ny"});
+    m.only({"type", "origin", "width", "height", "nx", "ny", "grading", "grading_centre"});
     const Vec o = m.vector("origin", 2, "the lower left corner, 2 numbers");
     const double w = m.positive("width", "the width, a positive number");
     const double h = m.positive("height", "the height, a positive number");
@@ -730,8 +734,30 @@ Mesh Builder::mesh(const Fields& f, std::string* text) const {
                                    ny, kMaxElements, ny));
     *text =
         fmt::format("rectangle, {} x {} elements, {} x {} from ({}, {})", nx, ny, w, h, o[0], o[1]);
-    return rectangle_mesh(Eigen::Vector2d(o[0], o[1]), w, h, static_cast<int>(nx),
-                          static_cast<int>(ny));
+    const Eigen::Vector2d lo(o[0], o[1]), hi(o[0] + w, o[1] + h);
+    Mesh mesh = rectangle_mesh(lo, w, h, static_cast<int>(nx), static_cast<int>(ny));
+    // Grading: element sizes growing away from a point (Hertz's contact).
+    const auto grading = m.optional_vector("grading", 2);
+    const auto centre = m.optional_vector("grading_centre", 2);
+    if (centre && !grading)
+      m.fail_key("grading_centre", "has no effect without grading = [px, py], received " +
+                                       show(*m.find("grading_centre")));
+    if (grading) {
+      for (int d = 0; d < 2; ++d)
+        if (!((*grading)[d] >= 1.0 && (*grading)[d] <= 10.0))
+          m.fail_key("grading", "must be two powers in [1, 10] (1: uniform), received " +
+                                    show(*m.find("grading")));
+      const Eigen::Vector2d c =
+          centre ? Eigen::Vector2d((*centre)[0], (*centre)[1]) : 0.5 * (lo + hi);
+      if (!(c.x() >= lo.x() && c.x() <= hi.x() && c.y() >= lo.y() && c.y() <= hi.y()))
+        m.fail_key("grading_centre",
+                   fmt::format("must lie in the rectangle ({}, {}) .. ({}, {}), received {}",
+                               lo.x(), lo.y(), hi.x(), hi.y(), show(*m.find("grading_centre"))));
+      grade_mesh(mesh, lo, hi, c, Eigen::Vector2d((*grading)[0], (*grading)[1]));
+      *text += fmt::format(", graded (powers {}, {}) towards ({}, {})", (*grading)[0],
+                           (*grading)[1], c.x(), c.y());
+    }
+    return mesh;
   }
   if (type == "gmsh") {
     // A Gmsh MSH 4.1 file, relative to the scene file's folder; its physical
@@ -1106,17 +1132,38 @@ void Builder::parse_load(const Fields& f) {
 }
 
 void Builder::parse_statics(const Fields& f) {
-  f.only({"enabled", "hold_rotation", "pseudo_dt", "tolerance", "max_steps", "newton_tolerance"});
+  f.only({"enabled", "hold_rotation", "pseudo_dt", "tolerance", "max_steps", "newton_tolerance",
+          "increments", "load_time"});
   SceneStatics& st = scene_.statics;
   // Writing the section means wanting it; enabled = false switches it off
   // (e.g. --set statics.enabled=false) without deleting it.
   st.enabled = f.boolean("enabled", true);
+  if (scene_.static_only && !st.enabled)
+    f.fail_key("enabled",
+               "a scene without [time] is a static analysis: its [statics] cannot be switched "
+               "off (add [time] for a dynamic run), received false");
   StaticSettings& s = st.settings;
   s.pseudo_dt = f.optional_positive("pseudo_dt").value_or(s.pseudo_dt);
   s.tolerance = f.optional_positive("tolerance").value_or(s.tolerance);
   s.max_steps = static_cast<int>(f.integer_in("max_steps", s.max_steps, 1, 100000));
   s.newton = scene_.newton;
   s.newton.tolerance = f.optional_positive("newton_tolerance").value_or(scene_.newton.tolerance);
+  s.increments = static_cast<int>(f.integer_in("increments", 1, 1, 100000));
+  const double load_time = f.optional_non_negative("load_time").value_or(0.0);
+  s.load_time = load_time;
+  // Increments at one time would all solve the same problem.
+  if (s.increments > 1 && !(load_time > 0))
+    f.fail_key("increments",
+               fmt::format("more than one increment needs a load_time > 0 over which the "
+                           "loads and prescribed motions grow (increment k is solved at "
+                           "load_time k / increments), received {}",
+                           s.increments));
+  // The dynamics start from the equilibrium, at its load time.
+  if (!scene_.static_only && f.has("load_time") && !(load_time < scene_.time.t_end))
+    f.fail_key("load_time",
+               "must be before time.t_end = " + show_number(scene_.time.t_end) +
+                   " (the dynamics start from the equilibrium at load_time), received " +
+                   show(*f.find("load_time")));
   if (const auto* n = f.find("hold_rotation")) {
     const auto* a = n->as_array();
     if (!a)
@@ -1170,7 +1217,18 @@ void Builder::parse_output(const Fields& f) {
 
 void Builder::parse_tolerances(const Fields& f) {
   f.only({"energy_rel", "energy_balance_rel", "linear_momentum", "angular_momentum_rel",
-          "angular_momentum_balance_rel", "constraint", "gap_violation", "penetration"});
+          "angular_momentum_balance_rel", "constraint", "gap_violation", "penetration",
+          "contact_pressure_spread"});
+  // A static analysis has no time history whose energy or momenta could drift.
+  if (scene_.static_only)
+    for (const char* k : {"energy_rel", "energy_balance_rel", "linear_momentum",
+                          "angular_momentum_rel", "angular_momentum_balance_rel"})
+      if (f.has(k))
+        f.fail_key(k,
+                   "a static analysis (no [time]) has no energy or momentum to check (its "
+                   "checks: constraint, gap_violation, penetration, contact_pressure_spread), "
+                   "received " +
+                       show(*f.find(k)));
   Tolerances& t = scene_.tolerances;
   t.energy_rel = f.optional_positive("energy_rel");
   t.energy_balance_rel = f.optional_positive("energy_balance_rel");
@@ -1180,9 +1238,18 @@ void Builder::parse_tolerances(const Fields& f) {
   t.constraint = f.optional_positive("constraint");
   t.gap_violation = f.optional_positive("gap_violation");
   t.penetration = f.optional_positive("penetration");
+  t.contact_pressure_spread = f.optional_positive("contact_pressure_spread");
+  if (t.contact_pressure_spread && scene_.contacts.empty())
+    f.fail_key("contact_pressure_spread",
+               "the scene has no [[contacts]] whose pressure could be checked, received " +
+                   show(*f.find("contact_pressure_spread")));
 }
 
 void Builder::finish() {
+  if (scene_.static_only && !scheme_name_where_.empty())
+    warn(scheme_name_where_, "scheme.name '" + scene_.scheme +
+                                 "' is not used: a scene without [time] is a static analysis "
+                                 "(its Newton settings are)");
   if (particles_.empty() && bodies_.empty())
     fail(loc_.start(), "bodies",
          "missing: the scene has no [[bodies]] and no [[particles]], nothing to integrate");
@@ -1218,7 +1285,9 @@ struct Section {
 // dimension.
 const Section kSections[] = {
     {"scene", Kind::Table, false, true, "", &Builder::parse_scene},
-    {"time", Kind::Table, true, false, "[time] with dt and t_end", &Builder::parse_time},
+    {"time", Kind::Table, true, false,
+     "[time] with dt and t_end; or, for a static analysis, [statics] without [time]",
+     &Builder::parse_time},
     {"scheme", Kind::Table, false, true, "", &Builder::parse_scheme},
     {"particles", Kind::ArrayOfTables, false, false, "", &Builder::parse_particle},
     {"springs", Kind::ArrayOfTables, false, false, "", &Builder::parse_spring},
@@ -1253,6 +1322,11 @@ void build(Builder& builder, const Locator& loc, const toml::table& root) {
   for (const auto& s : kSections) {
     const toml::node* n = root.get(s.name);
     if (!n) {
+      // Without [time], a scene with [statics] is a static analysis.
+      if (std::string_view(s.name) == "time" && root.get("statics")) {
+        builder.set_static_only();
+        continue;
+      }
       if (s.required) fail(loc.start(), s.name, std::string("missing (required: ") + s.needs + ")");
       if (s.always) (builder.*s.parse)(Fields(loc, empty, s.name, std::string("[") + s.name + "]"));
       continue;

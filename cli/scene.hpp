@@ -4,7 +4,8 @@
 // (docs/scenes.md lists every key with its unit, default and range):
 //
 //   [scene]        name, description, dimension (2 | 3, default 2)
-//   [time]         dt (> 0), t_end (>= dt), min_dt (optional, <= dt)
+//   [time]         dt (> 0), t_end (>= dt), min_dt (optional, <= dt); without
+//                  [time], a scene with [statics] is a static analysis
 //   [scheme]       name (see known_schemes(), default "em"), newton_tolerance,
 //                  newton_max_iterations, line_search; rtol, atol (ida);
 //                  rho_inf (galpha); locate_impacts, gap_tolerance (contact)
@@ -12,9 +13,10 @@
 //   [[springs]]    between = ["a", "b"], stiffness, rest_length, law ("linear" | "green")
 //   [[links]]      between = ["a", "b"], length: rigid distance constraint
 //   [[anchors]]    particle, point, length: rigid link to a fixed point
-//   [[bodies]]     name, mesh = {type = "ring" | "rectangle", ...}, material =
+//   [[bodies]]     name, mesh = {type = "ring" | "rectangle" | "gmsh", ...}, material =
 //                  {model, young, poisson, density}, velocity, angular_velocity,
-//                  lumped_mass: a plane-strain Q1 body (2D only)
+//                  lumped_mass: a plane-strain Q1 body (2D only); a rectangle may be
+//                  graded towards a point (grading, grading_centre)
 //   [[contacts]]   name, slave = "body.set", master = "body.set" (edge sets),
 //                  search_margin: frictionless mortar contact
 //   [[dirichlet]]  nodes = "body.set", fixed = true | displacement = [ux, uy]
@@ -24,12 +26,13 @@
 //   [[loads]]      type = "torque" | "body_force" | "traction", on/body, the
 //                  magnitude (torque, acceleration, traction), time_function
 //   [statics]      enabled, hold_rotation = ["body.set", ...], pseudo_dt,
-//                  tolerance, max_steps, newton_tolerance: equilibrium first
+//                  tolerance, max_steps, newton_tolerance, increments,
+//                  load_time: equilibrium first (or only, without [time])
 //   [output]       every (history row every N steps, default 1), vtu_every (VTU
 //                  fields of FE bodies every N steps; default about 100 files, 0: none)
 //   [tolerances]   energy_rel, energy_balance_rel, linear_momentum,
 //                  angular_momentum_rel, angular_momentum_balance_rel,
-//                  constraint, gap_violation, penetration
+//                  constraint, gap_violation, penetration, contact_pressure_spread
 //
 // Sets of FE bodies are named "body.set": the mesh generators' node and edge
 // sets ("inner", "outer" of a ring; "left", "right", "bottom", "top" of a
@@ -121,10 +124,11 @@ struct SceneLoad {
   TimeFunction g = TimeFunction::constant(1.0);
 };
 
-/// [statics]: an equilibrium solve before the dynamics.
+/// [statics]: an equilibrium solve before the dynamics, or the whole run of
+/// a static analysis (a scene without [time]).
 struct SceneStatics {
   bool enabled = false;
-  StaticSettings settings;
+  StaticSettings settings;                      // settings.load_time is always set (default 0)
   std::vector<std::string> hold_names;          // "body.set"
   std::vector<std::vector<int>> hold_rotation;  // their system nodes
 };
@@ -133,6 +137,9 @@ struct Scene {
   std::string name, description, source_path;
   int dimension = 2;
   std::unique_ptr<System> system;
+  /// No [time], [statics] given: the run is the static solve alone (time is
+  /// then unused).
+  bool static_only = false;
   TimeSettings time;
   std::string scheme = "em";
   NewtonSettings newton;

@@ -133,4 +133,34 @@ void MortarContact::prepare(const Vec& q, const Vec& v, double dt) {
   }
 }
 
+std::vector<SlavePressure> slave_pressures(const System& system, const Vec& q, const Vec& lambda,
+                                           const std::vector<int>& active) {
+  const Eigen::Index n_static = system.n_constraints();
+  if (lambda.size() != n_static + static_cast<Eigen::Index>(active.size()))
+    throw std::invalid_argument("slave_pressures: " + std::to_string(lambda.size()) +
+                                " multipliers for " + std::to_string(n_static) +
+                                " constraints and " + std::to_string(active.size()) +
+                                " active contact nodes");
+  std::vector<SlavePressure> out;
+  for (std::size_t k = 0; k < active.size(); ++k) {
+    const auto [set, i] = system.unilateral_candidate(active[k]);
+    const auto* contact = dynamic_cast<const MortarContact*>(
+        system.unilateral()[static_cast<std::size_t>(set)].get());
+    if (!contact) continue;
+    SlavePressure p;
+    p.set = set;
+    p.candidate = i;
+    p.node = contact->slave_node(i);
+    p.gap = contact->gap(i, q);
+    p.weight = contact->weight(i);
+    p.force = -lambda[n_static + static_cast<Eigen::Index>(k)];
+    p.pressure = p.force / p.weight;
+    out.push_back(p);
+  }
+  std::sort(out.begin(), out.end(), [](const SlavePressure& a, const SlavePressure& b) {
+    return a.set != b.set ? a.set < b.set : a.candidate < b.candidate;
+  });
+  return out;
+}
+
 }  // namespace emdae

@@ -63,4 +63,26 @@ class MortarContact final : public UnilateralConstraints {
   long n_pairs_ = 0;
 };
 
+/// The contact pressure at one active slave node A of a MortarContact. Its
+/// multiplier lambda_A belongs to the normalized weighted gap Phi_A = g_A /
+/// w_A (mortar.hpp), so -lambda_A = p_A w_A is the node's share of the normal
+/// force and p_A = -lambda_A / w_A its pressure (positive: compressive). At
+/// an equilibrium these are the static multipliers; after a time step of em
+/// or midpoint they are the constant contact force of that step.
+struct SlavePressure {
+  int set = 0;          // index in System::unilateral()
+  int candidate = 0;    // index in the set (MortarContact::slave_node(candidate))
+  int node = 0;         // system node
+  double gap = 0.0;     // Phi_A(q) (+infinity when nothing lies opposite any more)
+  double weight = 0.0;  // w_A, reference configuration
+  double force = 0.0;   // -lambda_A = p_A w_A
+  double pressure = 0.0;
+};
+
+/// The pressures of every active candidate of every MortarContact of
+/// `system`, sorted by set, then candidate; `lambda` and `active` as in a
+/// State (the contact multipliers after the system's n_constraints() own).
+std::vector<SlavePressure> slave_pressures(const System& system, const Vec& q, const Vec& lambda,
+                                           const std::vector<int>& active);
+
 }  // namespace emdae

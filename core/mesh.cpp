@@ -161,6 +161,30 @@ Mesh rectangle_mesh(const Eigen::Vector2d& origin, double width, double height, 
   return m;
 }
 
+void grade_mesh(Mesh& mesh, const Eigen::Vector2d& lo, const Eigen::Vector2d& hi,
+                const Eigen::Vector2d& centre, const Eigen::Vector2d& power) {
+  for (int d = 0; d < 2; ++d) {
+    if (!(power[d] >= 1.0) || !std::isfinite(power[d])) {
+      std::ostringstream s;
+      s << "grading power must be at least 1, received " << power[d];
+      throw std::invalid_argument(s.str());
+    }
+    if (!(centre[d] >= lo[d] && centre[d] <= hi[d])) {
+      std::ostringstream s;
+      s << "grading centre (" << centre.x() << ", " << centre.y() << ") must lie in the box ("
+        << lo.x() << ", " << lo.y() << ") .. (" << hi.x() << ", " << hi.y() << ")";
+      throw std::invalid_argument(s.str());
+    }
+  }
+  for (auto& x : mesh.nodes)
+    for (int d = 0; d < 2; ++d) {
+      const double r = x[d] - centre[d];
+      const double length = r < 0 ? centre[d] - lo[d] : hi[d] - centre[d];
+      if (power[d] == 1.0 || r == 0.0 || !(length > 0)) continue;
+      x[d] = centre[d] + r * std::pow(std::abs(r) / length, power[d] - 1.0);
+    }
+}
+
 BodyInfo add_body(System& system, const Mesh& mesh, const Material& material,
                   const BodyOptions& options) {
   const std::string where = "body '" + options.name + "'";

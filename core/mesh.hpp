@@ -57,6 +57,16 @@ Mesh ring_mesh(const Eigen::Vector2d& centre, double inner_radius, double outer_
 /// "bottom", "top".
 Mesh rectangle_mesh(const Eigen::Vector2d& origin, double width, double height, int nx, int ny);
 
+/// Grades a mesh filling the box [lo, hi] towards the point `centre` of the
+/// box, each coordinate by itself: x -> c + (x - c) (|x - c| / L)^(p - 1),
+/// L the distance from c to the box's side on x's side, p = power[0] (y
+/// likewise with power[1]). p = 1 leaves a coordinate alone; p = 2 makes the
+/// element size grow linearly away from c (on a uniform mesh). Maps the box
+/// onto itself, so the sets stay on its sides. Throws std::invalid_argument
+/// for p < 1 or a centre outside the box.
+void grade_mesh(Mesh& mesh, const Eigen::Vector2d& lo, const Eigen::Vector2d& hi,
+                const Eigen::Vector2d& centre, const Eigen::Vector2d& power);
+
 struct BodyOptions {
   bool lumped_mass = false;  // row-sum lumping instead of the consistent mass
   Eigen::Vector2d velocity = Eigen::Vector2d::Zero();  // initial translation

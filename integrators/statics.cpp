@@ -3,6 +3,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <sstream>
+#include <stdexcept>
 
 #include "core/user_term.hpp"
 #include "integrators/midpoint_family.hpp"
@@ -41,11 +42,23 @@ std::unique_ptr<Term> rotation_hold(const std::vector<int>& nodes, const Vec& x)
 }  // namespace
 
 StaticResult solve_static(System& system, State& state, const StaticSettings& settings,
-                          const std::vector<std::vector<int>>& hold_rotation) {
+                          const std::vector<std::vector<int>>& hold_rotation,
+                          const StaticObserver& on_increment) {
+  if (settings.increments < 1)
+    throw std::invalid_argument("static solve: increments must be at least 1, received " +
+                                std::to_string(settings.increments));
   const int n_own = system.n_constraints();
   for (const auto& set : hold_rotation) system.add_constraint(rotation_hold(set, state.q));
-  // The holds go in after the system's own multipliers, before the contact ones.
+  // The holds go in after the system's own multipliers, before the contact
+  // ones, and leave the system again whatever happens (an observer may throw).
   const int n_holds = static_cast<int>(hold_rotation.size());
+  struct RemoveHolds {
+    System& system;
+    int n;
+    ~RemoveHolds() {
+      for (int k = 0; k < n; ++k) system.pop_constraint();
+    }
+  } remove_holds{system, n_holds};
   Vec lam = Vec::Zero(n_own + n_holds + static_cast<Eigen::Index>(state.active.size()));
   if (state.lambda.size() == n_own + static_cast<Eigen::Index>(state.active.size())) {
     lam.head(n_own) = state.lambda.head(n_own);
@@ -53,9 +66,29 @@ StaticResult solve_static(System& system, State& state, const StaticSettings& se
         state.lambda.tail(static_cast<Eigen::Index>(state.active.size()));
   }
   state.lambda = lam;
-  StaticResult out = solve_static_held(system, state, settings);
+  // Load increments: t_k = t_0 + (t_load - t_0) k / n, the last exactly t_load.
+  const int n = settings.increments;
+  const double t0 = state.t, t_load = settings.load_time.value_or(state.t);
+  StaticResult out;
+  for (int k = 1; k <= n; ++k) {
+    state.t = k == n ? t_load : t0 + (t_load - t0) * k / n;
+    const StaticResult r = solve_static_held(system, state, settings);
+    out.steps += r.steps;
+    out.newton_iterations += r.newton_iterations;
+    out.change = r.change;
+    if (!r.converged) {
+      std::ostringstream msg;
+      msg << r.message;
+      if (n > 1) msg << " (load increment " << k << " of " << n << ", t = " << state.t << ")";
+      out.message = msg.str();
+      break;
+    }
+    out.increments = k;
+    if (on_increment) on_increment(state, {k, state.t, r.steps, r.newton_iterations, r.change});
+  }
+  out.converged = out.increments == n;
+  if (out.converged) out.message = "ok";
   for (int k = 0; k < n_holds; ++k) out.holding_moments.push_back(state.lambda[n_own + k]);
-  for (int k = 0; k < n_holds; ++k) system.pop_constraint();
   Vec rest(state.lambda.size() - n_holds);
   rest.head(n_own) = state.lambda.head(n_own);
   rest.tail(rest.size() - n_own) = state.lambda.tail(rest.size() - n_own);

@@ -14,8 +14,16 @@
 // names node sets whose mean rotation about their centroid is constrained to
 // stay zero during the solve (a linear constraint, removed afterwards; its
 // multiplier is the moment it took, reported in the result).
+//
+// Load increments: with `increments` = n > 1 the loads and prescribed motions
+// are evaluated at t_k = t_0 + (t_load - t_0) k / n, k = 1..n, t_0 = state.t,
+// each solve starting from the previous equilibrium (a large prescribed push
+// in one go can overshoot into contact states Newton cannot recover from).
+// The rotation holds stay on through all increments.
 #pragma once
 
+#include <functional>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -28,6 +36,10 @@ struct StaticSettings {
   int max_steps = 100;       // pseudo steps
   double tolerance = 1e-10;  // on max |q_k+1 - q_k|
   NewtonSettings newton;
+  int increments = 1;  // load increments (>= 1)
+  // Time the loads and prescribed motions are evaluated at in the last
+  // increment; empty: state.t (every increment at the state's own time).
+  std::optional<double> load_time;
 };
 
 struct StaticResult {
@@ -36,13 +48,32 @@ struct StaticResult {
   long newton_iterations = 0;
   double change = 0.0;                  // last max |q_k+1 - q_k|
   std::vector<double> holding_moments;  // multipliers of the rotation holds
+  int increments = 0;                   // load increments converged
   std::string message;
 };
 
-/// Solves for equilibrium with the loads at time state.t, starting from
-/// state.q (v and multipliers are reset); on return state holds the
-/// equilibrium at rest, with its active contact set and multipliers.
+/// One converged load increment, for an observer.
+struct StaticIncrement {
+  int index = 0;   // 1 .. increments
+  double t = 0.0;  // the time its loads were evaluated at
+  int steps = 0;   // its pseudo steps
+  long newton_iterations = 0;
+  double change = 0.0;  // its last max |q_k+1 - q_k|
+};
+
+/// Called after each converged increment with the equilibrium reached. The
+/// rotation holds are constraints of the system during the call (after its
+/// own), and state.lambda holds their multipliers there, so that
+/// system.n_constraints() still tells where the contact multipliers start.
+using StaticObserver = std::function<void(const State&, const StaticIncrement&)>;
+
+/// Solves for equilibrium with the loads at time settings.load_time (or
+/// state.t), in settings.increments increments from state.t, starting from
+/// state.q (v is reset); on return state holds the last equilibrium reached,
+/// at rest, with its active contact set and multipliers, and state.t the
+/// time of its loads. Stops at the first increment that does not converge.
 StaticResult solve_static(System& system, State& state, const StaticSettings& settings,
-                          const std::vector<std::vector<int>>& hold_rotation = {});
+                          const std::vector<std::vector<int>>& hold_rotation = {},
+                          const StaticObserver& on_increment = {});
 
 }  // namespace emdae

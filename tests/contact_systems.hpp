@@ -1,6 +1,8 @@
 // Contact scenes built through the C++ API for the contact tests.
 #pragma once
 
+#include <algorithm>
+#include <cmath>
 #include <memory>
 
 #include "contact/mortar_contact.hpp"
@@ -109,6 +111,48 @@ inline Bearing bearing(double torque_peak = 1e4, int through = 10, int around_ou
   b.inner_surface = torque_nodes;
   s.add_load(make_torque(torque_nodes, TimeFunction::hat(0.0, 0.5, torque_peak), "torque"));
   return b;
+}
+
+struct HertzContact {
+  std::unique_ptr<System> system;
+  const MortarContact* contact = nullptr;
+  double radius = 1.0, young = 1000.0, nu = 0.3, push = 0.02;
+};
+
+/// Hertz (tests/test_hertz.cpp, examples/hertz.toml): an SVK cylinder (a ring
+/// of radius 1, inner radius 0.3, centred at (0, 1), around x through
+/// elements) on an SVK block (8 x 4, nx x ny elements, graded towards the
+/// origin: the nodes of the rectangle [-1, 1] x [-1, 0] mapped x -> 4 x |x|,
+/// y -> -4 y^2), E = 1000, nu = 0.3, rho = 1, plane strain; the block's base
+/// fixed, the ring's inner boundary held in x and pushed down by 0.02 t
+/// (t <= 1); frictionless contact of the ring's outer surface (slave) on the
+/// block's top (master).
+inline HertzContact hertz_contact(int around, int through, int nx, int ny) {
+  HertzContact h;
+  const double half_width = 4.0, depth = 4.0;
+  h.system = std::make_unique<System>(2);
+  System& s = *h.system;
+  const Material mat = make_material(MaterialModel::SaintVenantKirchhoff, h.young, h.nu, 1.0);
+  const Mesh ring =
+      ring_mesh(Eigen::Vector2d(0, h.radius), 0.3 * h.radius, h.radius, around, through);
+  Mesh block = rectangle_mesh(Eigen::Vector2d(-1, -1), 2, 1, nx, ny);
+  for (auto& p : block.nodes)  // grade towards (0, 0): x -> 4 x |x|, y -> -4 y^2
+    p = Eigen::Vector2d(half_width * p.x() * std::abs(p.x()), -depth * p.y() * p.y());
+  const BodyInfo br = add_body(s, ring, mat), bb = add_body(s, block, mat);
+  for (int n : block.node_sets.at("bottom")) s.fix_node(n + bb.node_offset);
+  for (int n : ring.node_sets.at("inner")) {
+    const int node = n + br.node_offset;
+    const double y0 = s.initial_positions()[s.dof(node, 1)];
+    s.prescribe({s.dof(node, 0), {}, {}});
+    s.prescribe({s.dof(node, 1),
+                 [y0, push = h.push](double t) { return y0 - push * std::min(t, 1.0); },
+                 {}});
+  }
+  auto contact = std::make_unique<MortarContact>(s, surface(ring, "outer", br.node_offset),
+                                                 surface(block, "top", bb.node_offset), "hertz");
+  h.contact = contact.get();
+  s.add_unilateral(std::move(contact));
+  return h;
 }
 
 }  // namespace emdae::test_systems

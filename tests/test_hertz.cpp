@@ -36,26 +36,10 @@ struct HertzFigures {
 };
 
 HertzFigures hertz(int around, int through, int nx, int ny) {
-  const double r = 1.0, half_width = 4.0, depth = 4.0, young = 1000.0, nu = 0.3, push = 0.02;
-  System s(2);
-  const Material mat = make_material(MaterialModel::SaintVenantKirchhoff, young, nu, 1.0);
-  const Mesh ring = ring_mesh(Eigen::Vector2d(0, r), 0.3 * r, r, around, through);
-  Mesh block = rectangle_mesh(Eigen::Vector2d(-1, -1), 2, 1, nx, ny);
-  for (auto& p : block.nodes)  // grade towards (0, 0): x -> 4 x |x|, y -> -4 y^2
-    p = Eigen::Vector2d(half_width * p.x() * std::abs(p.x()), -depth * p.y() * p.y());
-  const BodyInfo br = add_body(s, ring, mat), bb = add_body(s, block, mat);
-  for (int n : block.node_sets.at("bottom")) s.fix_node(n + bb.node_offset);
-  for (int n : ring.node_sets.at("inner")) {
-    const int node = n + br.node_offset;
-    const double y0 = s.initial_positions()[s.dof(node, 1)];
-    s.prescribe({s.dof(node, 0), {}, {}});
-    s.prescribe(
-        {s.dof(node, 1), [y0, push](double t) { return y0 - push * std::min(t, 1.0); }, {}});
-  }
-  auto contact = std::make_unique<MortarContact>(s, surface(ring, "outer", br.node_offset),
-                                                 surface(block, "top", bb.node_offset), "hertz");
-  const MortarContact& c = *contact;
-  s.add_unilateral(std::move(contact));
+  const test_systems::HertzContact h = test_systems::hertz_contact(around, through, nx, ny);
+  System& s = *h.system;
+  const MortarContact& c = *h.contact;
+  const double r = h.radius, young = h.young, nu = h.nu;
 
   HertzFigures out;
   out.dofs = s.n_dofs();
@@ -63,12 +47,16 @@ HertzFigures hertz(int around, int through, int nx, int ny) {
   State st = initial_state(s);
   StaticSettings ss;
   ss.newton.tolerance = 1e-10;
-  for (int k = 1; k <= 4; ++k) {  // load increments: the push is a ramp in t
-    st.t = 0.25 * k;
-    const StaticResult result = solve_static(s, st, ss);
-    EXPECT_TRUE(result.converged) << result.message;
-    if (!result.converged) return out;
-  }
+  ss.increments = 4;  // load increments: the push is a ramp in t, solved at t = 0.25 .. 1
+  ss.load_time = 1.0;
+  std::vector<double> times;
+  const StaticResult result = solve_static(
+      s, st, ss, {}, [&](const State&, const StaticIncrement& inc) { times.push_back(inc.t); });
+  EXPECT_TRUE(result.converged) << result.message;
+  if (!result.converged) return out;
+  EXPECT_EQ(result.increments, 4);
+  EXPECT_EQ(times, (std::vector<double>{0.25, 0.5, 0.75, 1.0}));
+  EXPECT_EQ(st.t, 1.0);
   out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   double m2 = 0.0;
   for (std::size_t k = 0; k < st.active.size(); ++k) {

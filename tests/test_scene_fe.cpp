@@ -68,6 +68,12 @@ std::vector<std::string> split(const std::string& line) {
   return cells;
 }
 
+std::string join(const std::vector<std::string>& cells) {
+  std::string out;
+  for (const auto& c : cells) out += (out.empty() ? "" : ",") + c;
+  return out;
+}
+
 using test_systems::line_of;
 
 // --- a small valid FE scene, and variations of it that must be refused -----------
@@ -87,6 +93,20 @@ const std::string kValid = kTime + kRings + kContact;
 const std::string kTorque =
     "[[loads]]\ntype = \"torque\"\non = \"a.inner\"\ntorque = 5.0\n"
     "time_function = { type = \"hat\", start = 0.0, end = 0.05 }\n\n";
+
+// A small static analysis ([statics], no [time]): a block pressed on another.
+const std::string kStatic =
+    "[[bodies]]\nname = \"lower\"\n"
+    "mesh = { type = \"rectangle\", origin = [0.0, 0.0], width = 2.0, height = 1.0, nx = 2, "
+    "ny = 1 }\nmaterial = { young = 100.0, poisson = 0.3, density = 1.0 }\n\n"
+    "[[bodies]]\nname = \"upper\"\n"
+    "mesh = { type = \"rectangle\", origin = [0.0, 1.0], width = 2.0, height = 1.0, nx = 3, "
+    "ny = 1 }\nmaterial = { young = 100.0, poisson = 0.3, density = 1.0 }\n\n"
+    "[[contacts]]\nname = \"interface\"\nslave = \"upper.bottom\"\nmaster = \"lower.top\"\n\n"
+    "[[dirichlet]]\nnodes = \"lower.bottom\"\nfixed = true\ncomponents = \"y\"\n\n"
+    "[[dirichlet]]\nnodes = \"upper.top\"\ndisplacement = [0.0, -0.01]\ncomponents = \"y\"\n"
+    "time_function = { type = \"ramp\", start = 0.0, end = 1.0 }\n\n"
+    "[statics]\nload_time = 1.0\n";
 
 using test_systems::Malformed;
 
@@ -228,6 +248,59 @@ std::vector<Malformed> malformed_fe_scenes() {
        "search_margin",
        {"key 'contacts[0].search_margin'", "received -1.0"}},
       {"nothing_to_integrate", kTime, "", {"key 'bodies'", "nothing to integrate"}},
+      // Static analyses ([statics] without [time]) and their keys.
+      {"static_increments_zero",
+       with(kStatic, "load_time = 1.0", "load_time = 1.0\nincrements = 0"),
+       "increments = 0",
+       {"key 'statics.increments'", "must be at least 1", "received 0"}},
+      {"static_key_misspelt",
+       with(kStatic, "load_time = 1.0", "load_time = 1.0\nincrement = 4"),
+       "increment = 4",
+       {"key 'statics.increment'", "unknown key", "did you mean 'increments'?"}},
+      {"static_mesh_key_misspelt",
+       with(kStatic, "nx = 2", "nxx = 2"),
+       "nxx = 2",
+       {"key 'bodies[0].mesh.nxx'", "unknown key"}},
+      {"static_increments_without_load_time",
+       with(kStatic, "load_time = 1.0", "increments = 4"),
+       "increments = 4",
+       {"key 'statics.increments'", "load_time > 0", "received 4"}},
+      {"static_load_time_negative",
+       with(kStatic, "load_time = 1.0", "load_time = -1.0"),
+       "load_time = -1.0",
+       {"key 'statics.load_time'", "must not be negative", "received -1.0"}},
+      {"static_switched_off",
+       with(kStatic, "load_time = 1.0", "load_time = 1.0\nenabled = false"),
+       "enabled = false",
+       {"key 'statics.enabled'", "static analysis", "received false"}},
+      {"static_energy_tolerance",
+       kStatic + "\n[tolerances]\nenergy_rel = 1e-8\n",
+       "energy_rel",
+       {"key 'tolerances.energy_rel'", "static analysis (no [time])", "contact_pressure_spread"}},
+      {"load_time_after_t_end",
+       kTime + kStatic,
+       "load_time = 1.0",
+       {"key 'statics.load_time'", "before time.t_end = 0.1", "received 1.0"}},
+      {"pressure_spread_without_contact",
+       kTime + kRings + "[tolerances]\ncontact_pressure_spread = 1e-8\n",
+       "contact_pressure_spread",
+       {"key 'tolerances.contact_pressure_spread'", "no [[contacts]]"}},
+      {"pressure_spread_not_positive",
+       kStatic + "\n[tolerances]\ncontact_pressure_spread = 0.0\n",
+       "contact_pressure_spread",
+       {"key 'tolerances.contact_pressure_spread'", "must be positive", "received 0.0"}},
+      {"grading_below_one",
+       with(kStatic, "nx = 2,", "nx = 2, grading = [0.5, 2.0],"),
+       "grading",
+       {"key 'bodies[0].mesh.grading'", "[1, 10]", "received [0.5, 2.0]"}},
+      {"grading_centre_outside",
+       with(kStatic, "nx = 2,", "nx = 2, grading = [2.0, 2.0], grading_centre = [3.0, 0.5],"),
+       "grading",
+       {"key 'bodies[0].mesh.grading_centre'", "must lie in the rectangle", "received [3.0, 0.5]"}},
+      {"grading_centre_without_grading",
+       with(kStatic, "nx = 2,", "nx = 2, grading_centre = [1.0, 0.5],"),
+       "grading_centre",
+       {"key 'bodies[0].mesh.grading_centre'", "without grading"}},
   };
 }
 
@@ -488,6 +561,58 @@ TEST(ExamplesFe, BearingIsThePapersBearing) {
   EXPECT_FALSE(scene->loads_vanish(0.0, 0.5));
 }
 
+// Every scene in examples/ loads cleanly: no errors, no warnings.
+TEST(ExamplesFe, EveryExampleSceneLoadsWithoutWarnings) {
+  int scenes = 0;
+  for (const auto& entry : fs::directory_iterator(EMDAE_EXAMPLES_DIR)) {
+    if (entry.path().extension() != ".toml") continue;
+    ++scenes;
+    SCOPED_TRACE(entry.path().string());
+    std::unique_ptr<Scene> scene;
+    ASSERT_NO_THROW(scene = load_scene(entry.path().string()));
+    EXPECT_TRUE(scene->warnings.empty()) << scene->warnings.front();
+  }
+  EXPECT_GE(scenes, 10);  // among them patch_test and hertz
+  EXPECT_TRUE(fs::exists(example("patch_test")));
+  EXPECT_TRUE(fs::exists(example("hertz")));
+}
+
+TEST(ExamplesFe, HertzIsTheTestsMediumMesh) {
+  // The graded block of the scene (grading = [2, 2] towards the origin) is
+  // the block tests/test_hertz.cpp maps by hand.
+  const auto scene = load_scene(example("hertz"));
+  const auto api = test_systems::hertz_contact(400, 16, 80, 40);
+  expect_same_system(*scene->system, *api.system);
+  EXPECT_TRUE(scene->static_only);
+  EXPECT_EQ(scene->statics.settings.increments, 4);
+  EXPECT_EQ(scene->statics.settings.load_time, 1.0);
+  ASSERT_EQ(scene->contacts.size(), 1u);
+  EXPECT_EQ(scene->contacts[0].slave, "cylinder.outer");
+  // The prescribed push agrees with the test's at every increment.
+  for (double t : {0.25, 0.5, 0.75, 1.0}) {
+    State a = initial_state(*scene->system), b = initial_state(*api.system);
+    for (const auto& p : scene->system->prescribed())
+      if (p.position) a.q[p.dof] = p.position(t);
+    for (const auto& p : api.system->prescribed())
+      if (p.position) b.q[p.dof] = p.position(t);
+    EXPECT_LE((a.q - b.q).cwiseAbs().maxCoeff(), 1e-15) << "t = " << t;
+  }
+}
+
+TEST(ExamplesFe, PatchTestIsAStaticAnalysis) {
+  const auto scene = load_scene(example("patch_test"));
+  EXPECT_TRUE(scene->static_only);
+  ASSERT_EQ(scene->bodies.size(), 2u);
+  EXPECT_EQ(scene->bodies[0].n_elements, 15);  // 5 x 3
+  EXPECT_EQ(scene->bodies[1].n_elements, 21);  // 7 x 3
+  ASSERT_EQ(scene->contacts.size(), 1u);
+  EXPECT_EQ(scene->contacts[0].candidates, 8);  // the upper block's bottom nodes
+  ASSERT_TRUE(scene->tolerances.contact_pressure_spread.has_value());
+  EXPECT_EQ(*scene->tolerances.contact_pressure_spread, 1e-8);
+  // Rollers at the base (y), the top pushed in y: 6 + 8 prescribed dofs.
+  EXPECT_EQ(scene->system->prescribed().size(), 14u);
+}
+
 TEST(ExamplesFe, FreeRingFliesFree) {
   const auto scene = load_scene(example("free_ring"));
   const System& s = *scene->system;
@@ -560,6 +685,13 @@ TEST(ExamplesFeRun, RingImpactReportsTheContact) {
     if (std::stoi(row[column("active_contacts")]) > 0) ++rows_in_contact;
   }
   EXPECT_GT(rows_in_contact, 50);  // t = 6.11 .. 7
+  // The contact pressure of the last state: summary and table agree with the history.
+  const nlohmann::json& p = s["contact_pressure"]["rings"];
+  ASSERT_TRUE(p.is_object()) << s;
+  const int active = std::stoi(split(lines.back())[column("active_contacts")]);
+  EXPECT_EQ(p["active_nodes"], active);
+  EXPECT_GE(p["normal_force"].get<double>(), 0.0);
+  EXPECT_EQ(read_lines(dir / "o/contact.csv").size(), static_cast<std::size_t>(active) + 1);
 }
 
 TEST(ExamplesFeRun, BearingBalancesEnergyAndReportsStatics) {
@@ -627,6 +759,183 @@ TEST(ExamplesFeRun, CheckShowsBodiesContactsLoadsAndStatics) {
         "holding the rotation of inner_ring.inner", "potentials    880: Q1 element 880"})
     EXPECT_NE(r.output.find(s), std::string::npos) << s << " in\n" << r.output;
   EXPECT_TRUE(fs::is_empty(dir.path()));
+}
+
+// --- static analyses through the command ------------------------------------------
+
+// The rows of contact.csv as name -> column values.
+struct ContactTable {
+  std::vector<std::string> header;
+  std::vector<std::vector<std::string>> rows;
+  double number(std::size_t row, const std::string& column) const {
+    const auto k =
+        static_cast<std::size_t>(std::find(header.begin(), header.end(), column) - header.begin());
+    EXPECT_LT(k, header.size()) << column;
+    return k < header.size() ? std::stod(rows[row][k]) : 0.0;
+  }
+};
+
+ContactTable read_contact_table(const std::string& path) {
+  const auto lines = read_lines(path);
+  ContactTable t;
+  if (lines.empty()) return t;
+  t.header = split(lines[0]);
+  for (std::size_t i = 1; i < lines.size(); ++i) t.rows.push_back(split(lines[i]));
+  return t;
+}
+
+TEST(ExamplesFeRun, PatchTestTransmitsAUniformPressure) {
+  TempDir dir;
+  const Result r =
+      emdae("run " + quote(example("patch_test")) + " --out " + quote(dir / "o"), dir.path());
+  ASSERT_EQ(r.code, 0) << r.output;
+  EXPECT_NE(r.output.find("analysis                    static, 1 load increment to t = 1"),
+            std::string::npos)
+      << r.output;
+  EXPECT_NE(r.output.find("check contact_pressure_spread pass"), std::string::npos) << r.output;
+  const nlohmann::json s = read_json(dir / "o/summary.json");
+  EXPECT_EQ(s["analysis"], "static");
+  EXPECT_EQ(s["status"], "ok");
+  EXPECT_FALSE(s.contains("energy_rel_error_max"));  // no time history to judge
+  EXPECT_FALSE(s.contains("steps"));
+  EXPECT_EQ(s["statics"]["converged"], true);
+  EXPECT_EQ(s["active_contacts"], 8);
+  const nlohmann::json& p = s["contact_pressure"]["interface"];
+  ASSERT_TRUE(p.is_object()) << s;
+  EXPECT_EQ(p["active_nodes"], 8);
+  EXPECT_LE(p["pressure_spread"].get<double>(), 1e-8);
+  EXPECT_NEAR(p["pressure_mean"].get<double>(), 1.0778858727840, 1e-9);  // = -sigma_yy
+  // Interface length 2: the normal force is the mean pressure times 2.
+  EXPECT_NEAR(p["normal_force"].get<double>(), 2 * p["pressure_mean"].get<double>(), 1e-9);
+  EXPECT_EQ(s["checks"]["contact_pressure_spread"]["result"], "pass");
+  EXPECT_EQ(s["checks_pass"], true);
+
+  const ContactTable t = read_contact_table(dir / "o/contact.csv");
+  EXPECT_EQ(join(t.header), "pair,node,x,y,gap,pressure,weight,force");
+  ASSERT_EQ(t.rows.size(), 8u);  // one per slave node: the whole interface is active
+  const double p0 = t.number(0, "pressure");
+  for (std::size_t i = 0; i < t.rows.size(); ++i) {
+    EXPECT_EQ(t.rows[i][0], "interface");
+    EXPECT_NEAR(t.number(i, "pressure"), p0, 1e-8 * p0) << "row " << i;
+    EXPECT_NEAR(t.number(i, "y"), 0.99, 1e-12);  // equal blocks: half the push each
+    EXPECT_LE(std::abs(t.number(i, "gap")), 1e-12);
+    EXPECT_NEAR(t.number(i, "force"), t.number(i, "pressure") * t.number(i, "weight"), 1e-12);
+  }
+  // One history row per load increment after the initial state.
+  const auto history = read_lines(dir / "o/history.csv");
+  ASSERT_EQ(history.size(), 3u);
+  EXPECT_EQ(split(history[2])[0], "1");  // t: the load time
+  // The equilibrium's fields carry the pressure.
+  std::ifstream vtu(dir / "o/fields/step_0000001.vtu");
+  std::stringstream text;
+  text << vtu.rdbuf();
+  EXPECT_NE(text.str().find("Name=\"contact_pressure\""), std::string::npos);
+  std::ifstream report(dir / "o/report.html");
+  std::stringstream html;
+  html << report.rdbuf();
+  EXPECT_NE(html.str().find("static analysis"), std::string::npos);
+  EXPECT_NE(html.str().find("contact_pressure.interface.pressure_spread"), std::string::npos);
+}
+
+TEST(ExamplesFeRun, HertzMatchesPlaneStrainHertz) {
+  TempDir dir;
+  const Result r =
+      emdae("run " + quote(example("hertz")) + " -q --out " + quote(dir / "o"), dir.path());
+  ASSERT_EQ(r.code, 0) << r.output;
+  const nlohmann::json s = read_json(dir / "o/summary.json");
+  EXPECT_EQ(s["statics"]["increments"], 4);
+  EXPECT_EQ(read_lines(dir / "o/history.csv").size(), 6u);  // header, initial, 4 increments
+  // Half-width from the pressure's second moment, a = 2 sqrt(sum f x^2 / F),
+  // p0 = 2 F / (pi a), against plane-strain Hertz for the measured force.
+  const ContactTable t = read_contact_table(dir / "o/contact.csv");
+  ASSERT_GT(t.rows.size(), 10u);
+  double force = 0.0, m2 = 0.0;
+  for (std::size_t i = 0; i < t.rows.size(); ++i) {
+    const double f = t.number(i, "force"), x = t.number(i, "x");
+    EXPECT_GT(f, 0.0);
+    force += f;
+    m2 += f * x * x;
+  }
+  EXPECT_NEAR(force, s["contact_pressure"]["hertz"]["normal_force"].get<double>(), 1e-12);
+  const double pi = std::acos(-1.0), young = 1000.0, nu = 0.3, radius = 1.0;
+  const double a = 2.0 * std::sqrt(m2 / force), p0 = 2.0 * force / (pi * a);
+  const double e_star = young / (2 * (1 - nu * nu));
+  const double a_hertz = std::sqrt(4 * force * radius / (pi * e_star));
+  const double p0_hertz = 2 * force / (pi * a_hertz);
+  std::printf(
+      "hertz scene: %zu nodes, F %.5f, a %.5f (Hertz %.5f, %+.2f %%), p0 %.4f (Hertz "
+      "%.4f, %+.2f %%)\n",
+      t.rows.size(), force, a, a_hertz, 100 * (a / a_hertz - 1), p0, p0_hertz,
+      100 * (p0 / p0_hertz - 1));
+  EXPECT_LE(std::abs(a / a_hertz - 1), 0.03);
+  EXPECT_LE(std::abs(p0 / p0_hertz - 1), 0.03);
+  EXPECT_EQ(s["checks_pass"], true);
+}
+
+TEST(SceneFeRun, StaticSceneWritesPerIncrementAndRefusesCompareAndStudy) {
+  TempDir dir;
+  const std::string path =
+      dir.write("press.toml", with(kStatic, "load_time = 1.0", "load_time = 1.0\nincrements = 3"));
+  // The default folder of a static analysis: out/<name>-static.
+  const Result r = emdae("run " + quote(path) + " -q", dir.path());
+  ASSERT_EQ(r.code, 0) << r.output;
+  const std::string out = dir / "out/press-static";
+  const nlohmann::json s = read_json(out + "/summary.json");
+  EXPECT_EQ(s["analysis"], "static");
+  EXPECT_EQ(s["increments"], 3);
+  EXPECT_EQ(s["statics"]["increments"], 3);
+  const auto history = read_lines(out + "/history.csv");
+  ASSERT_EQ(history.size(), 5u);  // header, initial state, 3 increments
+  const auto header = split(history[0]);
+  for (std::size_t i = 1; i < history.size(); ++i)
+    EXPECT_NEAR(std::stod(split(history[i])[0]), (i - 1) / 3.0, 1e-15);  // t = k / 3
+  for (const char* f : {"step_0000000.vtu", "step_0000001.vtu", "step_0000003.vtu"})
+    EXPECT_TRUE(fs::exists(fs::path(out) / "fields" / f)) << f;
+  EXPECT_TRUE(fs::exists(out + "/contact.csv"));
+  EXPECT_TRUE(fs::exists(out + "/report.html"));
+
+  // Compare and study run schemes over time steps: a static analysis is bad input.
+  for (const std::string& cmd : {"compare " + quote(path) + " --schemes em,midpoint",
+                                 "study " + quote(path) + " --schemes em"}) {
+    const fs::path cwd = dir.path() / cmd.substr(0, cmd.find(' '));
+    fs::create_directories(cwd);
+    const Result refused = emdae(cmd, cwd);
+    EXPECT_EQ(refused.code, 2) << cmd << "\n" << refused.output;
+    EXPECT_NE(refused.output.find(path + ":1:1: key 'time'"), std::string::npos) << refused.output;
+    EXPECT_NE(refused.output.find("static analysis"), std::string::npos) << refused.output;
+    EXPECT_TRUE(fs::is_empty(cwd)) << cmd;
+  }
+  // check shows what the run will do.
+  const Result c = emdae("check " + quote(path), dir.path());
+  ASSERT_EQ(c.code, 0) << c.output;
+  EXPECT_NE(c.output.find("the equilibrium is the run (3 load increments to t = 1"),
+            std::string::npos)
+      << c.output;
+  EXPECT_EQ(c.output.find("dt = "), std::string::npos) << c.output;
+}
+
+TEST(SceneFeRun, StaticFailuresExitThreeAndFour) {
+  TempDir dir;
+  // The solve cannot converge in one pseudo step to 1e-14: exit 3, the record kept.
+  const std::string failing = dir.write(
+      "fails.toml",
+      with(kStatic, "load_time = 1.0", "load_time = 1.0\nmax_steps = 1\ntolerance = 1e-14"));
+  Result r = emdae("run " + quote(failing) + " -q --out " + quote(dir / "f"), dir.path());
+  EXPECT_EQ(r.code, 3) << r.output;
+  nlohmann::json s = read_json(dir / "f/summary.json");
+  EXPECT_EQ(s["statics"]["converged"], false);
+  EXPECT_NE(s["status"].get<std::string>().find("not converged after 1 pseudo"), std::string::npos)
+      << s;
+  EXPECT_EQ(read_lines(dir / "f/history.csv").size(), 2u);  // header and the initial state
+  // A pressure spread tighter than round-off: the run is fine, the check fails (exit 4).
+  const std::string strict =
+      dir.write("strict.toml", kStatic + "\n[tolerances]\ncontact_pressure_spread = 1e-300\n");
+  r = emdae("run " + quote(strict) + " -q --out " + quote(dir / "s"), dir.path());
+  EXPECT_EQ(r.code, 4) << r.output;
+  EXPECT_NE(r.output.find("check contact_pressure_spread failed"), std::string::npos) << r.output;
+  s = read_json(dir / "s/summary.json");
+  EXPECT_EQ(s["checks"]["contact_pressure_spread"]["result"], "fail");
+  EXPECT_EQ(s["status"], "ok");
 }
 
 }  // namespace

@@ -34,8 +34,9 @@ struct Figure {
   std::string caption;
   std::string note;  // shown instead of a plot when there is nothing to draw
   std::string xlabel = "t";
-  bool log_x = false;   // logarithmic x axis (non-positive x are left out)
-  bool points = false;  // mark each data point (few points: a study's runs)
+  bool log_x = false;      // logarithmic x axis (non-positive x are left out)
+  bool points = false;     // mark each data point (few points: a study's runs)
+  bool from_zero = false;  // linear y axis from zero (a nearly uniform pressure looks flat)
 };
 
 std::string html_escape(const std::string& s);

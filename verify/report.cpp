@@ -523,6 +523,10 @@ Plot draw(const Figure& fig, const ScratchFolder& scratch) {
     range = fmt::format("set logscale y 10\nset format y '10^{{%L}}'\nset yrange [{:g}:{:g}]\n", lo,
                         hi);
   } else {
+    if (fig.from_zero) {
+      y_lo = std::min(y_lo, 0.0);
+      y_hi = std::max(y_hi, 0.0);
+    }
     // Room above and below, and a visible band when the curve is flat.
     const double pad = (y_hi > y_lo) ? 0.05 * (y_hi - y_lo) : std::max(1.0, std::abs(y_hi)) * 0.5;
     range = fmt::format("set yrange [{:.17g}:{:.17g}]\n", y_lo - pad, y_hi + pad);
@@ -798,6 +802,119 @@ std::vector<Figure> run_figures(const RunCurves& c, const Json& summary,
   return figs;
 }
 
+// The figures of a static analysis: one point per load increment (the
+// history's rows), the equilibrium's energy, residuals and contact.
+std::vector<Figure> static_figures(const Table& h, const std::optional<double>& constraint_limit) {
+  std::vector<double> x(h.rows());
+  for (std::size_t i = 0; i < x.size(); ++i) x[i] = static_cast<double>(i);
+  const auto series = [&](const std::string& label, const std::string& column) {
+    const auto* y = h.column(column);
+    return Series{label, x, y ? *y : std::vector<double>(x.size(), kNaN)};
+  };
+  std::vector<Figure> figs;
+  Figure energy{"energy",
+                "Potential energy",
+                "energy",
+                Axis::Linear,
+                {series("potential", "potential")},
+                std::nullopt,
+                "The stored (and load) potential energy of each load increment's equilibrium; "
+                "increment 0 is the initial state.",
+                ""};
+  figs.push_back(energy);
+  Figure phi{"constraint", "Constraint residual", "max |Φ|", Axis::Log,
+             {},           constraint_limit,      "",        ""};
+  for (const char* name : {"phi_max", "gap_violation_max"})
+    if (h.column(name)) phi.series.push_back(series(name, name));
+  phi.caption =
+      "max<sub>l</sub> |&Phi;<sub>l</sub>| over the constraints at each equilibrium; "
+      "gap_violation_max: the same over the active contact nodes." +
+      floor_caption(true);
+  figs.push_back(phi);
+  // Counts of an increment start with the first: row 0 is the initial state.
+  Series newton = series("Newton iterations", "newton_iterations");
+  if (newton.t.size() > 1) {
+    newton.t.erase(newton.t.begin());
+    newton.y.erase(newton.y.begin());
+  }
+  figs.push_back({"newton",
+                  "Newton iterations",
+                  "per increment",
+                  Axis::Linear,
+                  {newton},
+                  std::nullopt,
+                  "Newton iterations of each load increment's pseudo steps.",
+                  ""});
+  if (h.column("active_contacts"))
+    figs.push_back({"contact",
+                    "Active contact nodes",
+                    "nodes",
+                    Axis::Linear,
+                    {series("active_contacts", "active_contacts")},
+                    std::nullopt,
+                    "Slave nodes in the active set at each equilibrium.",
+                    ""});
+  if (h.column("penetration_max"))
+    figs.push_back({"penetration",
+                    "Penetration",
+                    "depth",
+                    Axis::Log,
+                    {series("penetration_max", "penetration_max")},
+                    std::nullopt,
+                    "Deepest penetration of an inactive slave node." + floor_caption(true),
+                    ""});
+  // Few points, one per increment: each is marked.
+  for (auto& f : figs) {
+    f.xlabel = "load increment";
+    f.points = true;
+  }
+  drop_zero_curves(figs);
+  return figs;
+}
+
+// The pressure along each contact pair from contact.csv (pressure against
+// the slave nodes' x), or nothing when the run has no such table.
+std::optional<Figure> pressure_figure(const fs::path& path) {
+  std::ifstream in(path);
+  std::string line;
+  if (!in || !std::getline(in, line)) return std::nullopt;
+  if (!line.empty() && line.back() == '\r') line.pop_back();
+  const auto names = split(line, ',');
+  const auto at = [&](const char* name) {
+    return static_cast<std::size_t>(std::find(names.begin(), names.end(), name) - names.begin());
+  };
+  const std::size_t pair = at("pair"), x = at("x"), p = at("pressure");
+  if (pair >= names.size() || x >= names.size() || p >= names.size()) return std::nullopt;
+  std::vector<Series> series;
+  while (std::getline(in, line)) {
+    if (!line.empty() && line.back() == '\r') line.pop_back();
+    const auto cells = split(line, ',');
+    if (cells.size() != names.size()) continue;  // a quoted name with a comma: not drawn
+    auto it = std::find_if(series.begin(), series.end(),
+                           [&](const Series& s) { return s.label == cells[pair]; });
+    if (it == series.end()) {
+      series.push_back({cells[pair], {}, {}});
+      it = series.end() - 1;
+    }
+    it->t.push_back(std::strtod(cells[x].c_str(), nullptr));
+    it->y.push_back(std::strtod(cells[p].c_str(), nullptr));
+  }
+  Figure fig{"contact-pressure",
+             "Contact pressure",
+             "pressure",
+             Axis::Linear,
+             std::move(series),
+             std::nullopt,
+             "p<sub>A</sub> = &minus;&lambda;<sub>A</sub> / w<sub>A</sub> at each active slave "
+             "node of the last state, against its x (contact.csv).",
+             ""};
+  fig.xlabel = "x";
+  fig.points = true;
+  fig.from_zero = true;
+  if (fig.series.empty()) fig.note = "no active contact node at the end";
+  return fig;
+}
+
 // A curve that is exactly zero throughout says more in words than as a line
 // along the bottom of a logarithmic axis.
 void drop_zero_curves(std::vector<Figure>& figs) {
@@ -842,8 +959,9 @@ std::string checks_html(const Json& summary) {
       "<table class=\"checks\">\n<tr><th>check</th><th>value</th><th>limit</th>"
       "<th>result</th></tr>\n";
   for (const auto& [name, c] : summary["checks"].items()) {
-    const std::string value =
-        c["value"].is_null() ? "not conserved" : sci(c["value"].get<double>());
+    const std::string value = c["value"].is_null()
+                                  ? html_escape(c.value("note", std::string("not conserved")))
+                                  : sci(c["value"].get<double>());
     out += fmt::format(
         "<tr><td><code>{}</code></td><td class=\"num\">{}</td><td class=\"num\">{}</td>"
         "<td>{}</td></tr>\n",
@@ -932,8 +1050,10 @@ void write_report(const std::string& dir, const ReportInfo& info, const Summary&
   const Json json = to_json(summary);
   const fs::path folder(dir);
   std::string html = page_head("emdae report: " + info.scene_name + " (" + info.scheme + ")");
-  const std::string what = "run with <code>" + html_escape(info.scheme) + "</code>, status " +
-                           status_badge(summary.status);
+  const std::string what =
+      (summary.static_analysis ? std::string("static analysis")
+                               : "run with <code>" + html_escape(info.scheme) + "</code>") +
+      ", status " + status_badge(summary.status);
   html += header_html(info, what);
 
   html += "<section id=\"checks\">\n<h2>Checks against the scene's tolerances</h2>\n";
@@ -956,13 +1076,22 @@ void write_report(const std::string& dir, const ReportInfo& info, const Summary&
   std::vector<Figure> figures;
   try {
     const Table table = read_history(folder / "history.csv");
-    const RunCurves curves = derive_curves(table, json);
-    figures =
-        run_figures(curves, json,
-                    check_limit(json, curves.energy_balance ? "energy_balance_rel" : "energy_rel"),
-                    check_limit(json, "constraint"));
-    html +=
-        fmt::format("<p class=\"meta\">{} recorded states from history.csv.</p>\n", table.rows());
+    if (summary.static_analysis) {
+      figures = static_figures(table, check_limit(json, "constraint"));
+    } else {
+      const RunCurves curves = derive_curves(table, json);
+      figures = run_figures(
+          curves, json,
+          check_limit(json, curves.energy_balance ? "energy_balance_rel" : "energy_rel"),
+          check_limit(json, "constraint"));
+    }
+    // The pressure is what a static contact analysis is for: its figure first.
+    if (auto pressure = pressure_figure(folder / "contact.csv"))
+      figures.insert(summary.static_analysis ? figures.begin() : figures.end(),
+                     std::move(*pressure));
+    html += fmt::format(
+        "<p class=\"meta\">{} recorded states from history.csv{}.</p>\n", table.rows(),
+        summary.static_analysis ? " (the initial state, then one per load increment)" : "");
     if (table.rows() < 2)
       html += "<p class=\"warning\">Only the initial state was recorded: nothing to plot.</p>\n";
     else

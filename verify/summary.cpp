@@ -13,10 +13,14 @@ namespace emdae {
 
 namespace {
 
-Check make_check(const std::string& name, std::optional<double> value, double limit) {
-  Check c{name, value, limit, "skipped"};
+Check make_check(const std::string& name, std::optional<double> value, double limit,
+                 const std::string& why_skipped = "not conserved by this system") {
+  Check c{name, value, limit, "skipped", ""};
   // A NaN error must fail, hence the negated comparison.
-  if (value) c.result = !(*value <= limit) ? "fail" : "pass";
+  if (value)
+    c.result = !(*value <= limit) ? "fail" : "pass";
+  else
+    c.note = why_skipped;
   return c;
 }
 
@@ -76,26 +80,39 @@ Summary summarize(const RunInfo& info, const System& system, const Recorder& rec
     c.contact_events = recorder.contact_events();
     s.contact = c;
   }
+  s.active_contacts = recorder.last().active_contacts;
+  s.contact_pressure = info.contact_pressure;
   s.statics = info.statics;
+  s.static_analysis = info.static_analysis;
+  s.increments = info.increments;
+  s.load_time = info.load_time;
+  s.potential_energy = recorder.last().quantities.potential;
   s.status = info.status;
   s.dofs = system.n_dofs();
   s.free_dofs = system.n_dofs() - static_cast<int>(system.prescribed().size());
   s.constraints = system.n_constraints();
+  // A static analysis has no energy or momentum history to judge.
+  const auto dynamic = [&](std::optional<double> x) {
+    return s.static_analysis ? std::nullopt : x;
+  };
+  const std::string why =
+      s.static_analysis ? "not applicable to a static analysis" : "not conserved by this system";
   if (tolerances.energy_rel)
-    s.checks.push_back(make_check("energy_rel", s.energy_rel_error_max, *tolerances.energy_rel));
-  if (tolerances.energy_balance_rel)
-    s.checks.push_back(make_check("energy_balance_rel", s.energy_balance_rel_error_max,
-                                  *tolerances.energy_balance_rel));
-  if (tolerances.linear_momentum)
     s.checks.push_back(
-        make_check("linear_momentum", s.linear_momentum_error_max, *tolerances.linear_momentum));
+        make_check("energy_rel", dynamic(s.energy_rel_error_max), *tolerances.energy_rel, why));
+  if (tolerances.energy_balance_rel)
+    s.checks.push_back(make_check("energy_balance_rel", dynamic(s.energy_balance_rel_error_max),
+                                  *tolerances.energy_balance_rel, why));
+  if (tolerances.linear_momentum)
+    s.checks.push_back(make_check("linear_momentum", dynamic(s.linear_momentum_error_max),
+                                  *tolerances.linear_momentum, why));
   if (tolerances.angular_momentum_rel)
-    s.checks.push_back(make_check("angular_momentum_rel", s.angular_momentum_rel_error_max,
-                                  *tolerances.angular_momentum_rel));
+    s.checks.push_back(make_check("angular_momentum_rel", dynamic(s.angular_momentum_rel_error_max),
+                                  *tolerances.angular_momentum_rel, why));
   if (tolerances.angular_momentum_balance_rel)
     s.checks.push_back(make_check("angular_momentum_balance_rel",
-                                  s.angular_momentum_balance_rel_error_max,
-                                  *tolerances.angular_momentum_balance_rel));
+                                  dynamic(s.angular_momentum_balance_rel_error_max),
+                                  *tolerances.angular_momentum_balance_rel, why));
   if (tolerances.constraint)
     s.checks.push_back(make_check("constraint", s.constraint_residual_max, *tolerances.constraint));
   const auto contact_figure = [&](double ContactFigures::*figure) -> std::optional<double> {
@@ -105,16 +122,97 @@ Summary summarize(const RunInfo& info, const System& system, const Recorder& rec
   if (tolerances.gap_violation)
     s.checks.push_back(make_check("gap_violation",
                                   contact_figure(&ContactFigures::gap_violation_max),
-                                  *tolerances.gap_violation));
+                                  *tolerances.gap_violation, "the system has no contact"));
   if (tolerances.penetration)
     s.checks.push_back(make_check("penetration", contact_figure(&ContactFigures::penetration_max),
-                                  *tolerances.penetration));
+                                  *tolerances.penetration, "the system has no contact"));
+  if (tolerances.contact_pressure_spread)
+    s.checks.push_back(make_check("contact_pressure_spread",
+                                  max_pressure_spread(s.contact_pressure),
+                                  *tolerances.contact_pressure_spread,
+                                  "no contact pair has an active node with a nonzero mean "
+                                  "pressure at the end"));
   return s;
 }
 
-nlohmann::ordered_json to_json(const Summary& s) {
+namespace {
+
+nlohmann::ordered_json pressure_json(const std::vector<PairPressure>& pairs) {
+  nlohmann::ordered_json out = nlohmann::ordered_json::object();
+  for (const auto& p : pairs)
+    out[p.pair] = {{"active_nodes", p.active_nodes},
+                   {"normal_force", p.normal_force},
+                   {"pressure_min", optional_number(p.pressure_min)},
+                   {"pressure_max", optional_number(p.pressure_max)},
+                   {"pressure_mean", optional_number(p.pressure_mean)},
+                   {"pressure_spread", optional_number(p.pressure_spread)}};
+  return out;
+}
+
+nlohmann::ordered_json statics_json(const StaticsOutcome& st) {
+  return {{"converged", st.converged},
+          {"steps", st.steps},
+          {"newton_iterations", st.newton_iterations},
+          {"change", st.change},
+          {"holds", st.holds},
+          {"holding_moments", st.holding_moments},
+          {"increments", st.increments},
+          {"active_contacts", st.active_contacts},
+          {"cpu_seconds", st.cpu_seconds},
+          {"message", st.message}};
+}
+
+// The tail every summary ends with: status, sizes, checks, version.
+void finish_json(const Summary& s, nlohmann::ordered_json& j) {
+  j["status"] = s.status;
+  j["dofs"] = s.dofs;
+  j["free_dofs"] = s.free_dofs;
+  j["constraints"] = s.constraints;
+  if (!s.checks.empty()) {
+    nlohmann::ordered_json checks = nlohmann::ordered_json::object();
+    for (const auto& c : s.checks) {
+      checks[c.name] = {
+          {"value", optional_number(c.value)}, {"limit", c.limit}, {"result", c.result}};
+      if (!c.note.empty()) checks[c.name]["note"] = c.note;
+    }
+    j["checks"] = checks;
+    j["checks_pass"] = s.checks_pass();
+  }
+  j["emdae_version"] = EMDAE_VERSION;
+}
+
+// A static analysis: the solve, the equilibrium's residuals and contact.
+nlohmann::ordered_json static_json(const Summary& s) {
   nlohmann::ordered_json j;
   j["scene"] = s.scene;
+  j["analysis"] = "static";
+  j["source"] = s.source;
+  j["dimension"] = s.dimension;
+  j["load_time"] = s.load_time;
+  j["increments"] = s.increments;
+  j["t_reached"] = s.t_reached;
+  j["newton_iterations"] = s.newton_iterations;
+  j["cpu_seconds"] = s.cpu_seconds;
+  j["potential_energy"] = s.potential_energy;
+  j["constraint_residual_max"] = s.constraint_residual_max;
+  if (s.contact) {
+    j["active_contacts"] = s.active_contacts;
+    j["gap_violation_max"] = s.contact->gap_violation_max;
+    j["penetration_max"] = s.contact->penetration_max;
+    if (!s.contact_pressure.empty()) j["contact_pressure"] = pressure_json(s.contact_pressure);
+  }
+  if (s.statics) j["statics"] = statics_json(*s.statics);
+  finish_json(s, j);
+  return j;
+}
+
+}  // namespace
+
+nlohmann::ordered_json to_json(const Summary& s) {
+  if (s.static_analysis) return static_json(s);
+  nlohmann::ordered_json j;
+  j["scene"] = s.scene;
+  j["analysis"] = "dynamic";
   j["scheme"] = s.scheme;
   j["source"] = s.source;
   j["dimension"] = s.dimension;
@@ -157,32 +255,10 @@ nlohmann::ordered_json to_json(const Summary& s) {
     j["gap_violation_max"] = c.gap_violation_max;
     j["penetration_max"] = c.penetration_max;
     j["contact_events"] = c.contact_events;
+    if (!s.contact_pressure.empty()) j["contact_pressure"] = pressure_json(s.contact_pressure);
   }
-  if (s.statics) {
-    const StaticsOutcome& st = *s.statics;
-    j["statics"] = {{"converged", st.converged},
-                    {"steps", st.steps},
-                    {"newton_iterations", st.newton_iterations},
-                    {"change", st.change},
-                    {"holds", st.holds},
-                    {"holding_moments", st.holding_moments},
-                    {"active_contacts", st.active_contacts},
-                    {"cpu_seconds", st.cpu_seconds},
-                    {"message", st.message}};
-  }
-  j["status"] = s.status;
-  j["dofs"] = s.dofs;
-  j["free_dofs"] = s.free_dofs;
-  j["constraints"] = s.constraints;
-  if (!s.checks.empty()) {
-    nlohmann::ordered_json checks = nlohmann::ordered_json::object();
-    for (const auto& c : s.checks)
-      checks[c.name] = {
-          {"value", optional_number(c.value)}, {"limit", c.limit}, {"result", c.result}};
-    j["checks"] = checks;
-    j["checks_pass"] = s.checks_pass();
-  }
-  j["emdae_version"] = EMDAE_VERSION;
+  if (s.statics) j["statics"] = statics_json(*s.statics);
+  finish_json(s, j);
   return j;
 }
 

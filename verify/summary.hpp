@@ -6,6 +6,11 @@
 // Momentum errors the system does not conserve are null, with the reason in
 // "<name>_note". Optional pass/fail thresholds (a scene's [tolerances]) are
 // reported under "checks".
+//
+// A static analysis (a scene with [statics] and without [time]) has no time
+// steps: its summary holds the static solve's outcome, the constraint and
+// contact residuals of the equilibrium and the contact pressure, and none of
+// the energy and momentum figures of a dynamic run (to_json leaves them out).
 #pragma once
 
 #include <nlohmann/json.hpp>
@@ -13,6 +18,7 @@
 #include <string>
 #include <vector>
 
+#include "verify/contact_pressure.hpp"
 #include "verify/recorder.hpp"
 
 namespace emdae {
@@ -27,9 +33,11 @@ struct Tolerances {
   std::optional<double> constraint;
   std::optional<double> gap_violation;
   std::optional<double> penetration;
+  std::optional<double> contact_pressure_spread;  // max over the pairs of (max - min) / |mean|
   bool any() const {
     return energy_rel || energy_balance_rel || linear_momentum || angular_momentum_rel ||
-           angular_momentum_balance_rel || constraint || gap_violation || penetration;
+           angular_momentum_balance_rel || constraint || gap_violation || penetration ||
+           contact_pressure_spread;
   }
 };
 
@@ -41,6 +49,7 @@ struct StaticsOutcome {
   double change = 0.0;                  // last max |q_k+1 - q_k|
   std::vector<std::string> holds;       // node sets whose rotation was held
   std::vector<double> holding_moments;  // the moments that took, one per hold
+  int increments = 0;                   // load increments converged
   int active_contacts = 0;              // active candidates at equilibrium
   double cpu_seconds = 0.0;             // not part of the run's cpu_seconds
   std::string message;
@@ -60,10 +69,15 @@ struct Check {
   std::optional<double> value;  // empty: not applicable (quantity not conserved)
   double limit = 0.0;
   std::string result;  // "pass", "fail" or "skipped"
+  std::string note;    // why it was skipped
 };
 
 struct Summary {
   std::string scene, scheme, source;
+  bool static_analysis = false;   // [statics] without [time]: no time steps
+  int increments = 0;             // static: load increments asked for
+  double load_time = 0.0;         // static: time of the last increment's loads
+  double potential_energy = 0.0;  // static: V at the last equilibrium
   int dimension = 2;
   double dt = 0.0, t_end = 0.0, t_reached = 0.0;
   long steps = 0;
@@ -86,7 +100,9 @@ struct Summary {
   std::optional<double> angular_momentum_balance_rel_error_max;
   std::string angular_momentum_balance_note;
   double constraint_residual_max = 0.0;
-  std::optional<ContactFigures> contact;  // with unilateral constraints
+  std::optional<ContactFigures> contact;       // with unilateral constraints
+  int active_contacts = 0;                     // at the last state
+  std::vector<PairPressure> contact_pressure;  // per contact pair, at the last state
   std::optional<StaticsOutcome> statics;
   std::string status;  // "ok" or what failed
   int dofs = 0, free_dofs = 0, constraints = 0;
@@ -102,7 +118,11 @@ struct RunInfo {
   double dt = 0.0, t_end = 0.0;
   double cpu_seconds = 0.0;
   std::string status = "ok";
-  std::optional<StaticsOutcome> statics;  // when the scene ran [statics]
+  std::optional<StaticsOutcome> statics;       // when the scene ran [statics]
+  bool static_analysis = false;                // the static solve was the whole run
+  int increments = 0;                          // static: load increments asked for
+  double load_time = 0.0;                      // static: time of the last increment's loads
+  std::vector<PairPressure> contact_pressure;  // per contact pair, at the last state
 };
 
 Summary summarize(const RunInfo& info, const System& system, const Recorder& recorder,

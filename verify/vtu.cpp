@@ -198,6 +198,18 @@ void FieldWriter::write(const State& state, long step) {
   vectors("displacement", displacement);
   vectors("velocity", velocity);
   vectors("reference_position", reference);
+  for (const auto& [name, field] : point_scalars_) {
+    const Vec values = field(state);
+    x += fmt::format("<DataArray type=\"Float64\" Name=\"{}\" format=\"ascii\">\n",
+                     xml_escape(name));
+    for (const auto& b : bodies_)
+      for (int k = 0; k < b.mesh.n_nodes(); ++k) {
+        const Eigen::Index node = b.node_offset + k;
+        put(x, node < values.size() ? values[node] : 0.0);
+        x += '\n';
+      }
+    x += "</DataArray>\n";
+  }
   x += "</PointData>\n";
 
   // Stresses: in-plane components, named so that ParaView labels them.
@@ -250,6 +262,10 @@ void FieldWriter::write(const State& state, long step) {
     entries_.back().t = state.t;
   else
     entries_.push_back({state.t, file});
+}
+
+void FieldWriter::add_point_scalar(std::string name, PointScalar field) {
+  point_scalars_.emplace_back(std::move(name), std::move(field));
 }
 
 void FieldWriter::close() {

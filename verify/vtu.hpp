@@ -4,7 +4,9 @@
 //
 // Per node (PointData): the current position is the grid's points; then
 // "displacement" u = x - X, "velocity" v and "reference_position" X, all
-// with 3 components (z = 0) as ParaView expects for vectors. Per element
+// with 3 components (z = 0) as ParaView expects for vectors, and the scalar
+// fields added by add_point_scalar() (the emdae command: "contact_pressure"
+// with contact). Per element
 // (CellData): "body" (index in the list given), the element stresses
 // averaged over the 2x2 Gauss points, "second_piola_kirchhoff" S and
 // "cauchy_stress" sigma = F S F^T / det F, each as the in-plane components
@@ -18,8 +20,10 @@
 // gets an index of what it wrote).
 #pragma once
 
+#include <functional>
 #include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "core/fe_element.hpp"
@@ -55,6 +59,11 @@ class FieldWriter {
   /// Writes fields.pvd; further writes are refused.
   void close();
 
+  /// A further scalar point field, computed from the state of each step:
+  /// one value per system node (e.g. "contact_pressure").
+  using PointScalar = std::function<Vec(const State&)>;
+  void add_point_scalar(std::string name, PointScalar field);
+
   /// Path of the VTU file of `step`, relative to the output folder.
   static std::string file_name(long step);
   const std::string& pvd_path() const { return pvd_path_; }
@@ -74,6 +83,7 @@ class FieldWriter {
     std::string file;
   };
   std::vector<Entry> entries_;
+  std::vector<std::pair<std::string, PointScalar>> point_scalars_;
   bool closed_ = false;
 };
 

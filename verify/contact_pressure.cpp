@@ -1,0 +1,102 @@
+#include "verify/contact_pressure.hpp"
+
+#include <fmt/format.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <fstream>
+#include <stdexcept>
+
+namespace emdae {
+
+namespace {
+
+std::string number(double x) {
+  if (std::isnan(x)) return "nan";
+  if (std::isinf(x)) return x > 0 ? "inf" : "-inf";
+  return fmt::format("{:.17g}", x);
+}
+
+// A CSV field: quoted when it holds a separator, a quote or a line break.
+std::string field(const std::string& s) {
+  if (s.find_first_of(",\"\n\r") == std::string::npos) return s;
+  std::string out = "\"";
+  for (char c : s) out += c == '"' ? std::string("\"\"") : std::string(1, c);
+  return out + "\"";
+}
+
+}  // namespace
+
+std::vector<std::string> contact_table_columns() {
+  return {"pair", "node", "x", "y", "gap", "pressure", "weight", "force"};
+}
+
+std::vector<PairPressure> pair_pressures(const std::vector<std::string>& pairs,
+                                         const std::vector<ContactNode>& nodes) {
+  std::vector<PairPressure> out;
+  for (const auto& name : pairs) {
+    PairPressure p;
+    p.pair = name;
+    double sum = 0.0;
+    for (const auto& n : nodes) {
+      if (n.pair != name) continue;
+      ++p.active_nodes;
+      p.normal_force += n.force;
+      sum += n.pressure;
+      p.pressure_min = p.pressure_min ? std::min(*p.pressure_min, n.pressure) : n.pressure;
+      p.pressure_max = p.pressure_max ? std::max(*p.pressure_max, n.pressure) : n.pressure;
+    }
+    if (p.active_nodes > 0) {
+      p.pressure_mean = sum / p.active_nodes;
+      if (std::abs(*p.pressure_mean) > 0)
+        p.pressure_spread = (*p.pressure_max - *p.pressure_min) / std::abs(*p.pressure_mean);
+    }
+    out.push_back(p);
+  }
+  return out;
+}
+
+std::optional<double> max_pressure_spread(const std::vector<PairPressure>& pairs) {
+  std::optional<double> out;
+  for (const auto& p : pairs) {
+    if (!p.pressure_spread) continue;
+    // A NaN wins (once there, it stays): a broken run must not pass the check.
+    const double s = *p.pressure_spread;
+    if (!out || std::isnan(s) || s > *out) out = s;
+  }
+  return out;
+}
+
+void write_contact_table(const std::string& path, const std::vector<ContactNode>& nodes) {
+  std::string text;
+  const auto columns = contact_table_columns();
+  for (std::size_t i = 0; i < columns.size(); ++i) text += (i ? "," : "") + columns[i];
+  text += '\n';
+  for (const auto& n : nodes)
+    text +=
+        fmt::format("{},{},{},{},{},{},{},{}\n", field(n.pair), n.node, number(n.x), number(n.y),
+                    number(n.gap), number(n.pressure), number(n.weight), number(n.force));
+  const std::string tmp = path + ".tmp." + std::to_string(::getpid());
+  {
+    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
+    if (!out)
+      throw std::runtime_error("cannot write contact table '" + tmp + "': " + std::strerror(errno));
+    out << text;
+    out.flush();
+    if (!out) {
+      std::remove(tmp.c_str());
+      throw std::runtime_error("cannot write contact table '" + tmp + "'");
+    }
+  }
+  if (std::rename(tmp.c_str(), path.c_str()) != 0) {
+    const std::string why = std::strerror(errno);
+    std::remove(tmp.c_str());
+    throw std::runtime_error("cannot move contact table into place '" + path + "': " + why);
+  }
+}
+
+}  // namespace emdae
