@@ -12,6 +12,7 @@
 #include <fstream>
 #include <map>
 #include <optional>
+#include <set>
 #include <sstream>
 
 #include "contact/mortar_contact.hpp"
@@ -453,6 +454,7 @@ class Builder {
   std::map<std::string, std::size_t> by_name_;
   // Rigid links by node pair (smaller first), with where they were declared.
   std::map<std::pair<int, int>, std::string> links_;
+  std::set<int> anchored_;  // nodes with an anchor (a second one is redundant)
   std::vector<BodyRecord> bodies_;
   // Prescribed dofs: which [[dirichlet]] entry set them, and whether it fixed them.
   std::map<int, std::pair<std::string, bool>> prescribed_by_;
@@ -663,21 +665,55 @@ void Builder::parse_link(const Fields& f) {
   system().add_constraint(make_link(system(), a->node, b->node, l));
 }
 
+// An anchor is a rigid link to a fixed point: of one particle, or of every
+// node of a body's node set (each at its own initial distance: radial
+// rollers about the point, which keep every constraint invariant under
+// rotations about it; the bearing on rollers, examples/bearing_rollers.toml).
 void Builder::parse_anchor(const Fields& f) {
-  f.only({"particle", "point", "length"});
+  f.only({"particle", "nodes", "point", "length"});
   const int dim = scene_.dimension;
+  if (f.has("particle") == f.has("nodes"))
+    f.fail_key(f.has("nodes") ? "nodes" : "particle",
+               "give either particle (one particle) or nodes (a body's node set), not " +
+                   std::string(f.has("nodes") ? "both" : "neither"));
+  const Vec point = f.vector("point", dim, fmt::format("the anchor point, {} numbers", dim));
+  const auto anchor = [&](int node, const Vec& x, const Vec& v, double l, const std::string& what) {
+    if (!anchored_.insert(node).second)
+      f.fail_key(f.has("nodes") ? "nodes" : "particle",
+                 what + " is anchored already (a second rigid link would be redundant)");
+    const Vec d = x - point;
+    if (std::abs(d.dot(v)) > 1e-9 * d.norm() * v.norm())
+      warn(f.where(), "initial velocity of " + what + " changes the length of its anchor link");
+    system().add_constraint(make_anchor_link(system(), node, point, l));
+  };
+  if (f.has("nodes")) {
+    if (f.has("length"))
+      f.fail_key("length",
+                 "each node of a set keeps its initial distance; length is for a particle");
+    const SetRef set = set_ref(f, "nodes", SetKind::Nodes, "the node set, \"body.set\"");
+    const System& s = system();
+    for (int node : nodes_of(set)) {
+      const std::string what = "node " + std::to_string(node) + " of " + set.label;
+      for (int c = 0; c < dim; ++c)
+        if (s.is_prescribed()[static_cast<std::size_t>(s.dof(node, c))])
+          f.fail_key("nodes",
+                     what + " is prescribed by [[dirichlet]]: an anchor would be redundant");
+      const Vec x = s.initial_positions().segment(s.dof(node, 0), dim);
+      if (!((x - point).norm() > 0))
+        f.fail_key("point", what + " lies on the anchor point: no distance to keep");
+      anchor(node, x, s.initial_velocities().segment(s.dof(node, 0), dim), (x - point).norm(),
+             what);
+    }
+    return;
+  }
   const ParticleRecord& p =
       particle(f, "particle", f.require("particle", "the name of the anchored particle"));
   if (p.fixed)
     f.fail_key("particle",
                "an anchor on a fixed particle constrains nothing, received \"" + p.name + "\"");
-  const Vec point = f.vector("point", dim, fmt::format("the anchor point, {} numbers", dim));
-  const Vec d = p.position - point;
   const std::string between = "'" + p.name + "' and its anchor point";
-  const double l = length(f, "length", d.norm(), true, between);
-  if (std::abs(d.dot(p.velocity)) > 1e-9 * d.norm() * p.velocity.norm())
-    warn(f.where(), "initial velocity of '" + p.name + "' changes the length of its anchor link");
-  system().add_constraint(make_anchor_link(system(), p.node, point, l));
+  const double l = length(f, "length", (p.position - point).norm(), true, between);
+  anchor(p.node, p.position, p.velocity, l, "'" + p.name + "'");
 }
 
 // --- FE bodies and what refers to them ----------------------------------------------
@@ -1280,7 +1316,8 @@ struct Section {
 };
 
 // Later sections may refer to earlier ones (springs name particles, contacts
-// and loads name body sets, gravity weighs particles and the free body nodes,
+// and loads name body sets, anchors name particles or body sets and must not
+// meet prescribed nodes, gravity weighs particles and the free body nodes,
 // statics holds body sets), so the order matters; [scene] comes first for the
 // dimension.
 const Section kSections[] = {
@@ -1292,10 +1329,10 @@ const Section kSections[] = {
     {"particles", Kind::ArrayOfTables, false, false, "", &Builder::parse_particle},
     {"springs", Kind::ArrayOfTables, false, false, "", &Builder::parse_spring},
     {"links", Kind::ArrayOfTables, false, false, "", &Builder::parse_link},
-    {"anchors", Kind::ArrayOfTables, false, false, "", &Builder::parse_anchor},
     {"bodies", Kind::ArrayOfTables, false, false, "", &Builder::parse_body},
     {"contacts", Kind::ArrayOfTables, false, false, "", &Builder::parse_contact},
     {"dirichlet", Kind::ArrayOfTables, false, false, "", &Builder::parse_dirichlet},
+    {"anchors", Kind::ArrayOfTables, false, false, "", &Builder::parse_anchor},
     {"gravity", Kind::Table, false, false, "", &Builder::parse_gravity},
     {"loads", Kind::ArrayOfTables, false, false, "", &Builder::parse_load},
     {"statics", Kind::Table, false, false, "", &Builder::parse_statics},

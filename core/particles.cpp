@@ -66,8 +66,12 @@ class Spring final : public QuadraticFormTerm {
 // midpoint gradient and the constraint is exactly the quadratic invariant.
 class Link final : public QuadraticFormTerm {
  public:
-  Link(std::vector<int> dofs, Mat a, Vec b, double c, double length, bool anchored)
-      : QuadraticFormTerm(std::move(dofs), 1), length_(length), anchored_(anchored) {
+  Link(std::vector<int> dofs, Mat a, Vec b, double c, double length, bool anchored,
+       Symmetry symmetry)
+      : QuadraticFormTerm(std::move(dofs), 1),
+        length_(length),
+        anchored_(anchored),
+        symmetry_(symmetry) {
     add_invariant(std::move(a), std::move(b), c);
   }
   double block_value(int, const VecRef& pi, double) const override {
@@ -78,7 +82,7 @@ class Link final : public QuadraticFormTerm {
   }
   void block_hessian(int, const VecRef&, double, Eigen::Ref<Mat> h) const override { h(0, 0) = 0; }
   bool quadratic_in_invariants() const override { return true; }
-  Symmetry symmetry() const override { return anchored_ ? Symmetry{false, false} : Symmetry{}; }
+  Symmetry symmetry() const override { return symmetry_; }
   std::string describe() const override {
     return std::string(anchored_ ? "anchor link" : "rigid link") +
            " (L = " + std::to_string(length_) + ")";
@@ -87,6 +91,7 @@ class Link final : public QuadraticFormTerm {
  private:
   double length_;
   bool anchored_;
+  Symmetry symmetry_;
 };
 
 // V = -f . pi with pi = q_a (linear invariants).
@@ -129,15 +134,17 @@ std::unique_ptr<Term> make_link(const System& system, int a, int b, double lengt
   check_positive(length, "link length");
   const int dim = system.dim();
   return std::make_unique<Link>(node_dofs(system, {a, b}), distance_form(dim), Vec::Zero(2 * dim),
-                                0.0, length, false);
+                                0.0, length, false, Symmetry{});
 }
 
 std::unique_ptr<Term> make_anchor_link(const System& system, int a, const Vec& p, double length) {
   check_positive(length, "link length");
   const int dim = system.dim();
-  // |q - p|^2 = q.q - 2 p.q + p.p
+  // |q - p|^2 = q.q - 2 p.q + p.p: invariant under rotations about p, so
+  // about the origin (where the momenta are measured) when p is the origin;
+  // never under translations.
   return std::make_unique<Link>(node_dofs(system, {a}), 2.0 * Mat::Identity(dim, dim), -2.0 * p,
-                                p.squaredNorm(), length, true);
+                                p.squaredNorm(), length, true, Symmetry{false, p.isZero(0.0)});
 }
 
 std::unique_ptr<Term> make_dead_load(const System& system, int a, const Vec& force) {

@@ -27,7 +27,8 @@ std::unique_ptr<Term> make_spring(const System& system, int a, int b, double sti
 /// Phi = (|q_a - q_b|^2 - L^2) / (2 L) so that it has units of length.
 std::unique_ptr<Term> make_link(const System& system, int a, int b, double length);
 
-/// Rigid distance constraint from node a to the fixed point p.
+/// Rigid distance constraint from node a to the fixed point p (invariant under
+/// rotations about p: with p the origin it conserves angular momentum).
 std::unique_ptr<Term> make_anchor_link(const System& system, int a, const Vec& p, double length);
 
 /// Dead load on node a: V = -f . q_a (gravity: f = m g).

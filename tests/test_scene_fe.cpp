@@ -239,6 +239,28 @@ std::vector<Malformed> malformed_fe_scenes() {
        kTime + kRings + "[scheme]\nname = \"galpha\"\nrho_inf = 1.5\n",
        "rho_inf",
        {"key 'scheme.rho_inf'", "[0, 1]", "received 1.5"}},
+      {"anchor_particle_and_nodes",
+       kValid + "[[anchors]]\nnodes = \"b.outer\"\nparticle = \"p\"\npoint = [0.0, 0.0]\n",
+       "nodes = ",
+       {"key 'anchors[0].nodes'", "either particle", "not both"}},
+      {"anchor_nodes_with_length",
+       kValid + "[[anchors]]\nnodes = \"b.outer\"\npoint = [10.5, 0.0]\nlength = 2.0\n",
+       "length",
+       {"key 'anchors[0].length'", "initial distance"}},
+      {"anchor_unknown_set",
+       kValid + "[[anchors]]\nnodes = \"b.rim\"\npoint = [10.5, 0.0]\n",
+       "b.rim",
+       {"key 'anchors[0].nodes'", "no node set 'rim'"}},
+      {"anchor_on_prescribed_nodes",
+       kValid + "[[dirichlet]]\nnodes = \"b.outer\"\nfixed = true\n\n" +
+           "[[anchors]]\nnodes = \"b.outer\"  # clamped already\npoint = [10.5, 0.0]\n",
+       "# clamped",
+       {"key 'anchors[0].nodes'", "prescribed by [[dirichlet]]"}},
+      {"anchor_twice",
+       kValid + "[[anchors]]\nnodes = \"b.outer\"\npoint = [10.5, 0.0]\n\n" +
+           "[[anchors]]\nnodes = \"b.outer\"  # again\npoint = [0.0, 0.0]\n",
+       "# again",
+       {"key 'anchors[1].nodes'", "anchored already"}},
       {"max_order_out_of_range",
        kTime + kRings + "[scheme]\nname = \"ida\"\nmax_order = 6\n",
        "max_order",
@@ -597,6 +619,23 @@ TEST(ExamplesFe, HertzIsTheTestsMediumMesh) {
       if (p.position) b.q[p.dof] = p.position(t);
     EXPECT_LE((a.q - b.q).cwiseAbs().maxCoeff(), 1e-15) << "t = " << t;
   }
+}
+
+TEST(ExamplesFe, BearingRollersIsTheTestsSystem) {
+  // examples/bearing_rollers.toml builds the bearing of tests/test_bearing.cpp
+  // on radial rollers (that test runs it: J = the torque's impulse to 7e-14);
+  // the anchors about the origin keep the system rotation-invariant, so the
+  // summary checks the angular-momentum balance.
+  const auto scene = load_scene(example("bearing_rollers"));
+  const auto api =
+      test_systems::bearing(1e4, 10, 48, 40, test_systems::BearingSupport::RadialRollers);
+  expect_same_system(*scene->system, *api.system);
+  EXPECT_TRUE(scene->system->prescribed().empty());
+  EXPECT_TRUE(scene->system->symmetry().rotation);
+  EXPECT_FALSE(scene->system->symmetry().translation);
+  EXPECT_EQ(scene->statics.hold_names.size(), 2u);
+  ASSERT_TRUE(scene->tolerances.angular_momentum_balance_rel.has_value());
+  EXPECT_EQ(*scene->tolerances.angular_momentum_balance_rel, 1e-8);
 }
 
 TEST(ExamplesFe, PatchTestIsAStaticAnalysis) {
