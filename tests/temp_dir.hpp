@@ -1,6 +1,8 @@
 // Helpers of the suites that run the emdae command: a fresh folder per test,
 // removed afterwards (named after the test and the process, so that
-// concurrent runs stay apart), and a shell command with its output.
+// concurrent runs stay apart), a shell command with its output, the command
+// itself (where the suite defines EMDAE_EXE), the example scenes (where it
+// defines EMDAE_EXAMPLES_DIR) and readers of what a run wrote.
 #pragma once
 
 #include <gtest/gtest.h>
@@ -10,7 +12,10 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
 #include <string>
+#include <vector>
 
 namespace emdae::test_systems {
 
@@ -61,6 +66,47 @@ inline CommandResult shell(const std::string& cmd) {
   const int status = ::pclose(pipe);
   r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
   return r;
+}
+
+/// `s` as one shell word.
+inline std::string quote(const std::string& s) {
+  std::string out = "'";
+  for (char c : s) out += (c == '\'') ? std::string("'\\''") : std::string(1, c);
+  return out + "'";
+}
+
+#ifdef EMDAE_EXAMPLES_DIR
+/// The path of examples/<name>.toml.
+inline std::string example(const std::string& name) {
+  return std::string(EMDAE_EXAMPLES_DIR) + "/" + name + ".toml";
+}
+#endif
+
+#ifdef EMDAE_EXE
+/// Runs the emdae executable with `args` through the shell from folder `cwd`.
+inline CommandResult emdae(const std::string& args, const std::filesystem::path& cwd =
+                                                        std::filesystem::temp_directory_path()) {
+  return shell("cd " + quote(cwd.string()) + " && " + quote(EMDAE_EXE) + " " + args);
+}
+#endif
+
+inline std::string read_text(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::ostringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+inline std::vector<std::string> read_lines(const std::filesystem::path& path) {
+  std::ifstream in(path);
+  std::vector<std::string> lines;
+  for (std::string line; std::getline(in, line);) lines.push_back(line);
+  return lines;
+}
+
+inline nlohmann::json read_json(const std::filesystem::path& path) {
+  std::ifstream in(path);
+  return nlohmann::json::parse(in);
 }
 
 }  // namespace emdae::test_systems

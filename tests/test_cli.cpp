@@ -25,37 +25,13 @@ namespace {
 
 namespace fs = std::filesystem;
 
-const std::string kExe = EMDAE_EXE;
-
-std::string example(const std::string& name) {
-  return std::string(EMDAE_EXAMPLES_DIR) + "/" + name + ".toml";
-}
-
-std::string quote(const std::string& s) {
-  return "'" + s + "'";
-}
-
 using Result = test_systems::CommandResult;
-
-// Runs `args` through the shell from folder `cwd`.
-Result emdae(const std::string& args, const fs::path& cwd = fs::temp_directory_path()) {
-  const std::string cmd = "cd " + quote(cwd.string()) + " && " + quote(kExe) + " " + args;
-  return test_systems::shell(cmd);
-}
-
+using test_systems::emdae;
+using test_systems::example;
+using test_systems::quote;
+using test_systems::read_json;
+using test_systems::read_lines;
 using test_systems::TempDir;
-
-nlohmann::json read_json(const std::string& path) {
-  std::ifstream in(path);
-  return nlohmann::json::parse(in);
-}
-
-std::vector<std::string> read_lines(const std::string& path) {
-  std::ifstream in(path);
-  std::vector<std::string> lines;
-  for (std::string line; std::getline(in, line);) lines.push_back(line);
-  return lines;
-}
 
 std::string join(const std::vector<std::string>& v) {
   std::string out;

@@ -36,18 +36,11 @@ namespace fs = std::filesystem;
 const std::string kExe = EMDAE_EXE;
 const char* kChromium = "/usr/bin/chromium";
 
-std::string example(const std::string& name) {
-  return std::string(EMDAE_EXAMPLES_DIR) + "/" + name + ".toml";
-}
-
-std::string quote(const std::string& s) {
-  std::string out = "'";
-  for (char c : s) out += (c == '\'') ? std::string("'\\''") : std::string(1, c);
-  return out + "'";
-}
-
 using Result = test_systems::CommandResult;
 
+using test_systems::example;
+using test_systems::quote;
+using test_systems::read_text;
 using test_systems::shell;
 
 Result emdae(const std::string& args, const std::string& env = "") {
@@ -55,13 +48,6 @@ Result emdae(const std::string& args, const std::string& env = "") {
 }
 
 using test_systems::TempDir;
-
-std::string read_text(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::ostringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
 
 int count(const std::string& text, const std::string& what) {
   int n = 0;

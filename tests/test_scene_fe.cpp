@@ -31,35 +31,13 @@ namespace {
 
 namespace fs = std::filesystem;
 
-std::string example(const std::string& name) {
-  return std::string(EMDAE_EXAMPLES_DIR) + "/" + name + ".toml";
-}
-
-std::string quote(const std::string& s) {
-  return "'" + s + "'";
-}
-
-using test_systems::TempDir;
-
 using Result = test_systems::CommandResult;
-
-// Runs the emdae executable with `args` through the shell from folder `cwd`.
-Result emdae(const std::string& args, const fs::path& cwd) {
-  const std::string cmd = "cd " + quote(cwd.string()) + " && " + quote(EMDAE_EXE) + " " + args;
-  return test_systems::shell(cmd);
-}
-
-nlohmann::json read_json(const std::string& path) {
-  std::ifstream in(path);
-  return nlohmann::json::parse(in);
-}
-
-std::vector<std::string> read_lines(const std::string& path) {
-  std::ifstream in(path);
-  std::vector<std::string> lines;
-  for (std::string line; std::getline(in, line);) lines.push_back(line);
-  return lines;
-}
+using test_systems::emdae;
+using test_systems::example;
+using test_systems::quote;
+using test_systems::read_json;
+using test_systems::read_lines;
+using test_systems::TempDir;
 
 std::vector<std::string> split(const std::string& line) {
   std::vector<std::string> cells;

@@ -25,44 +25,14 @@ namespace {
 
 namespace fs = std::filesystem;
 
-const std::string kExe = EMDAE_EXE;
-
-std::string example(const std::string& name) {
-  return std::string(EMDAE_EXAMPLES_DIR) + "/" + name + ".toml";
-}
-
-std::string quote(const std::string& s) {
-  std::string out = "'";
-  for (char c : s) out += (c == '\'') ? std::string("'\\''") : std::string(1, c);
-  return out + "'";
-}
-
 using Result = test_systems::CommandResult;
+using test_systems::emdae;
+using test_systems::example;
+using test_systems::quote;
+using test_systems::read_json;
+using test_systems::read_lines;
+using test_systems::read_text;
 using test_systems::TempDir;
-
-// Runs `args` through the shell from folder `cwd`.
-Result emdae(const std::string& args, const fs::path& cwd = fs::temp_directory_path()) {
-  return test_systems::shell("cd " + quote(cwd.string()) + " && " + quote(kExe) + " " + args);
-}
-
-nlohmann::json read_json(const fs::path& path) {
-  std::ifstream in(path);
-  return nlohmann::json::parse(in);
-}
-
-std::string read_text(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::ostringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
-
-std::vector<std::string> read_lines(const fs::path& path) {
-  std::ifstream in(path);
-  std::vector<std::string> lines;
-  for (std::string line; std::getline(in, line);) lines.push_back(line);
-  return lines;
-}
 
 bool have_gnuplot() {
   return test_systems::shell("gnuplot --version").code == 0;
