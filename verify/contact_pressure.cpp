@@ -11,6 +11,8 @@
 #include <fstream>
 #include <stdexcept>
 
+#include "verify/atomic_file.hpp"
+
 namespace emdae {
 
 namespace {
@@ -80,23 +82,7 @@ void write_contact_table(const std::string& path, const std::vector<ContactNode>
     text +=
         fmt::format("{},{},{},{},{},{},{},{}\n", field(n.pair), n.node, number(n.x), number(n.y),
                     number(n.gap), number(n.pressure), number(n.weight), number(n.force));
-  const std::string tmp = path + ".tmp." + std::to_string(::getpid());
-  {
-    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
-    if (!out)
-      throw std::runtime_error("cannot write contact table '" + tmp + "': " + std::strerror(errno));
-    out << text;
-    out.flush();
-    if (!out) {
-      std::remove(tmp.c_str());
-      throw std::runtime_error("cannot write contact table '" + tmp + "'");
-    }
-  }
-  if (std::rename(tmp.c_str(), path.c_str()) != 0) {
-    const std::string why = std::strerror(errno);
-    std::remove(tmp.c_str());
-    throw std::runtime_error("cannot move contact table into place '" + path + "': " + why);
-  }
+  write_atomically(path, text, "contact table");
 }
 
 }  // namespace emdae

@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "verify/atomic_file.hpp"
 #include "verify/report.hpp"
 
 namespace emdae::report_detail {
@@ -42,9 +43,6 @@ struct Figure {
 std::string html_escape(const std::string& s);
 /// "1.234e-05"; NaN and infinities spelled out.
 std::string sci(double x);
-/// Writes `content` to `path` through a temporary file in the same folder and
-/// a rename; throws std::runtime_error naming `what` and the path.
-void write_atomically(const std::string& path, const std::string& content, const char* what);
 
 /// <!DOCTYPE html> ... <body> with the shared styles.
 std::string page_head(const std::string& title);

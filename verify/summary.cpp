@@ -9,6 +9,8 @@
 #include <fstream>
 #include <stdexcept>
 
+#include "verify/atomic_file.hpp"
+
 namespace emdae {
 
 namespace {
@@ -263,24 +265,7 @@ nlohmann::ordered_json to_json(const Summary& s) {
 }
 
 void write_summary(const std::string& path, const Summary& summary) {
-  // Same folder as the target, so that rename() is atomic (one file system).
-  const std::string tmp = path + ".tmp." + std::to_string(::getpid());
-  {
-    std::ofstream out(tmp, std::ios::trunc);
-    if (!out)
-      throw std::runtime_error("cannot write summary '" + tmp + "': " + std::strerror(errno));
-    out << to_json(summary).dump(2) << '\n';
-    out.flush();
-    if (!out) {
-      std::remove(tmp.c_str());
-      throw std::runtime_error("cannot write summary '" + tmp + "'");
-    }
-  }
-  if (std::rename(tmp.c_str(), path.c_str()) != 0) {
-    const std::string why = std::strerror(errno);
-    std::remove(tmp.c_str());
-    throw std::runtime_error("cannot move summary into place '" + path + "': " + why);
-  }
+  write_atomically(path, to_json(summary).dump(2) + "\n", "summary");
 }
 
 }  // namespace emdae

@@ -11,6 +11,8 @@
 #include <fstream>
 #include <stdexcept>
 
+#include "verify/atomic_file.hpp"
+
 namespace emdae {
 
 namespace {
@@ -18,25 +20,6 @@ namespace {
 namespace fs = std::filesystem;
 
 constexpr int kVtkQuad = 9;
-
-void write_atomically(const std::string& path, const std::string& content) {
-  const std::string tmp = path + ".tmp." + std::to_string(::getpid());
-  {
-    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
-    if (!out) throw std::runtime_error("cannot write '" + tmp + "': " + std::strerror(errno));
-    out << content;
-    out.flush();
-    if (!out) {
-      std::remove(tmp.c_str());
-      throw std::runtime_error("cannot write '" + tmp + "'");
-    }
-  }
-  if (std::rename(tmp.c_str(), path.c_str()) != 0) {
-    const std::string why = std::strerror(errno);
-    std::remove(tmp.c_str());
-    throw std::runtime_error("cannot move '" + tmp + "' into place: " + why);
-  }
-}
 
 std::string xml_escape(const std::string& s) {
   std::string out;
@@ -256,7 +239,7 @@ void FieldWriter::write(const State& state, long step) {
   x += "</DataArray>\n</CellData>\n</Piece>\n</UnstructuredGrid>\n</VTKFile>\n";
 
   const std::string file = file_name(step);
-  write_atomically((fs::path(dir_) / file).string(), x);
+  write_atomically((fs::path(dir_) / file).string(), x, "VTU piece");
   // A step written twice (the last state) replaces its entry.
   if (!entries_.empty() && entries_.back().file == file)
     entries_.back().t = state.t;
@@ -286,7 +269,7 @@ void FieldWriter::write_pvd() const {
                      xml_escape(e.file));
   }
   x += "</Collection>\n</VTKFile>\n";
-  write_atomically(pvd_path_, x);
+  write_atomically(pvd_path_, x, "PVD index");
 }
 
 }  // namespace emdae
