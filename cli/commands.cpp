@@ -753,6 +753,14 @@ int run_scene(const RunOptions& options, std::ostream& out, std::ostream& err, R
   fields.maybe_write(state, 0);
 
   long last_written = 0;
+  // A history row every `output.every` steps (and at `last`), and the fields.
+  const auto keep = [&](const State& s, const Sample& sample, bool last) {
+    if (last || sample.step % scene->output.every == 0) {
+      history->write(sample);
+      last_written = sample.step;
+    }
+    fields.maybe_write(s, sample.step, last);
+  };
   // The contact table: the last state's, or for a static analysis the last
   // equilibrium's (a failed increment leaves no pressure worth the name).
   std::optional<std::vector<ContactNode>> contact;
@@ -777,13 +785,7 @@ int run_scene(const RunOptions& options, std::ostream& out, std::ostream& err, R
                                 t_previous = inc.t;
                                 step.stats.converged = true;
                                 step.stats.iterations = static_cast<int>(inc.newton_iterations);
-                                const Sample& sample = recorder.observe(s, step);
-                                const bool last = inc.index == increments;
-                                if (last || sample.step % scene->output.every == 0) {
-                                  history->write(sample);
-                                  last_written = sample.step;
-                                }
-                                fields.maybe_write(s, sample.step, last);
+                                keep(s, recorder.observe(s, step), inc.index == increments);
                                 take_contact(s);
                               });
     if (info.statics) info.cpu_seconds = info.statics->cpu_seconds;
@@ -793,11 +795,7 @@ int run_scene(const RunOptions& options, std::ostream& out, std::ostream& err, R
     if (exit_code == kExitOk)
       exit_code = integrate_scene(*scene, *stepper, state, recorder, info,
                                   [&](const State& s, const Sample& sample) {
-                                    if (sample.step % scene->output.every == 0) {
-                                      history->write(sample);
-                                      last_written = sample.step;
-                                    }
-                                    fields.maybe_write(s, sample.step);
+                                    keep(s, sample, false);
                                     progress.update(sample, recorder.newton_iterations());
                                   });
     progress.finish();
