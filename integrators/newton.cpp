@@ -7,10 +7,9 @@
 
 #include <algorithm>
 #include <cstdlib>
-#include <cstring>
 #include <exception>
 #include <stdexcept>
-#include <vector>
+#include <string>
 
 namespace emdae {
 
