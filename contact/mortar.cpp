@@ -1,5 +1,6 @@
 #include "contact/mortar.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 
@@ -31,6 +32,13 @@ T mortar_pair_gap(const T pi[5], int a) {
     sum = sum + n * gap_times_len;
   }
   return sum * half / p1;
+}
+
+unsigned mortar_pair_case(const double pi[5]) {
+  // Bits: facing, p1 > 0, p3 > 0 (sa = p3), p2 < p1 (sb = p2), overlap.
+  const double sa = std::max(0.0, pi[2]), sb = std::min(pi[0], pi[1]);
+  return (pi[2] < pi[1] ? 1u : 0u) | (pi[0] > 0.0 ? 2u : 0u) | (pi[2] > 0.0 ? 4u : 0u) |
+         (pi[1] < pi[0] ? 8u : 0u) | (sb > sa ? 16u : 0u);
 }
 
 template double mortar_pair_gap<double>(const double pi[5], int a);
@@ -147,6 +155,12 @@ void MortarGapTerm::block_hessian(int block, const VecRef& pi, double, Eigen::Re
   for (int k = 0; k < 5; ++k) p[k] = Jet<5>::variable(pi[k], k);
   const Jet<5> f = mortar_pair_gap(p, pairs_[static_cast<std::size_t>(block)].slave_node);
   h = f.h / weight_;
+}
+
+PathSmoothness MortarGapTerm::smoothness_between(int, const VecRef& pi0, const VecRef& pi1) const {
+  const double a[5] = {pi0[0], pi0[1], pi0[2], pi0[3], pi0[4]};
+  const double b[5] = {pi1[0], pi1[1], pi1[2], pi1[3], pi1[4]};
+  return mortar_pair_case(a) == mortar_pair_case(b) ? PathSmoothness::Smooth : PathSmoothness::Kink;
 }
 
 double MortarGapTerm::coverage(const Vec& q) const {

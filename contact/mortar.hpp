@@ -47,6 +47,10 @@ namespace emdae {
 template <class T>
 T mortar_pair_gap(const T pi[5], int a);
 
+/// The segmentation case of mortar_pair_gap at pi: a bit pattern that is
+/// equal for two points on the same smooth piece.
+unsigned mortar_pair_case(const double pi[5]);
+
 /// One segment pair of a slave node's gap: positions in the term's local
 /// node list of x1s, x2s, x1m, x2m, and which slave node the term is for.
 struct MortarPair {
@@ -72,6 +76,11 @@ class MortarGapTerm final : public Term {
   void block_gradient(int block, const VecRef& pi, double t, Eigen::Ref<Vec> g) const override;
   void block_hessian(int block, const VecRef& pi, double t, Eigen::Ref<Mat> h) const override;
   std::string describe() const override { return name_; }
+  /// The segmentation case (which of 0, pi1, pi2, pi3 bound the mortar
+  /// segment, and whether it is empty) is the same at both ends: every case
+  /// boundary is a linear inequality in pi, so along the straight path it is
+  /// crossed only if the case differs at the ends.
+  PathSmoothness smoothness_between(int block, const VecRef& pi0, const VecRef& pi1) const override;
 
   /// Fraction of the node's segments covered by mortar segments at q (local):
   /// 0 when no master segment overlaps any more.

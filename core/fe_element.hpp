@@ -52,6 +52,9 @@ class Q1Element final : public Term {
   void block_hessian(int block, const VecRef& pi, double t, Eigen::Ref<Mat> h) const override;
 
   bool quadratic_in_invariants() const override { return material_.quadratic_in_invariants(); }
+  PathSmoothness smoothness_between(int, const VecRef&, const VecRef&) const override {
+    return PathSmoothness::Smooth;
+  }
   std::string describe() const override;
 
   const Material& material() const { return material_; }

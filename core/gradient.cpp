@@ -68,25 +68,39 @@ void discrete_gradient(const Term& term, const Vec& q0, const Vec& q1, double t0
     const double d2 = dpi.squaredNorm();
     if (d2 == 0.0) continue;
     const double scale = std::max(ws.pi0.segment(b * m, m).norm(), ws.pi1.segment(b * m, m).norm());
-    // The numerator of c straight from its definition. For small dpi its
-    // round-off is large against the numerator itself (see below), but it
-    // is exact for a function that is not smooth along [pi0, pi1] (a mortar
-    // gap is only C0 where the segmentation changes). A smooth shortcut
-    // below is kept unless it differs from it by more than round-off plus
-    // 1e-6 of the first-order term |grad f~| |dpi|: a kink's defect is a
-    // sizeable fraction of that, a smooth function's O(|dpi|^2) smaller.
-    const double f0 = term.block_value(b, ws.pi0.segment(b * m, m), tm);
-    const double f1 = term.block_value(b, ws.pi1.segment(b * m, m), tm);
-    const double direct = f1 - f0 - gm.dot(dpi);
-    const double kink_tolerance = 1e3 * std::numeric_limits<double>::epsilon() *
-                                      (std::abs(f0) + std::abs(f1) + std::abs(gm.dot(dpi))) +
-                                  1e-6 * gm.norm() * std::sqrt(d2);
+    const bool small = d2 <= std::pow(kDiscreteGradientThreshold * scale, 2);
+    const bool large = d2 > std::pow(kDiscreteGradientQuadratureThreshold * scale, 2);
+    // A smooth f~ takes the shortcuts below. Across a kink (a mortar gap's
+    // segmentation changing within the step: Term::smoothness_between) they
+    // would miss the identity by O(|dpi|), so there the numerator of c is
+    // formed straight from its definition, exact whatever f~ does between
+    // the ends. For a function that cannot tell (Unknown: a user's), the
+    // direct numerator is formed too, and a shortcut is kept unless it
+    // differs from it by more than round-off plus 1e-6 of the first-order
+    // term |grad f~| |dpi| (a kink's defect is usually a sizeable fraction
+    // of that, a smooth function's O(|dpi|^2) smaller).
+    const PathSmoothness path =
+        term.smoothness_between(b, ws.pi0.segment(b * m, m), ws.pi1.segment(b * m, m));
+    double direct = 0.0, round_off = 0.0;
+    if (path != PathSmoothness::Smooth || large) {
+      const double f0 = term.block_value(b, ws.pi0.segment(b * m, m), tm);
+      const double f1 = term.block_value(b, ws.pi1.segment(b * m, m), tm);
+      direct = f1 - f0 - gm.dot(dpi);
+      round_off = 1e3 * std::numeric_limits<double>::epsilon() *
+                  (std::abs(f0) + std::abs(f1) + std::abs(gm.dot(dpi)));
+    }
+    const double kink_tolerance = round_off + 1e-6 * gm.norm() * std::sqrt(d2);
     double c = 0.0;
-    if (d2 <= std::pow(kDiscreteGradientThreshold * scale, 2)) {
-      // Smooth: the numerator is O(|dpi|^3), below round-off; c = 0.
-      if (std::abs(direct) <= kink_tolerance) continue;
+    if (path == PathSmoothness::Kink) {
+      // At the round-off of the quotient (a kink touched by a tiny step) the
+      // identity holds without c, and c would be noise over |dpi|^2.
+      if (std::abs(direct) <= round_off) continue;
       c = direct / d2;
-    } else if (d2 > std::pow(kDiscreteGradientQuadratureThreshold * scale, 2)) {
+    } else if (small) {
+      // The numerator is O(|dpi|^3), below round-off: c = 0.
+      if (path == PathSmoothness::Smooth || std::abs(direct) <= kink_tolerance) continue;
+      c = direct / d2;
+    } else if (large) {
       c = direct / d2;
     } else {
       // The quotient above loses eps |f~| / |dpi|^2 to cancellation, a force
@@ -108,7 +122,9 @@ void discrete_gradient(const Term& term, const Vec& q0, const Vec& q1, double t0
         h_plus -= h_minus;
         numerator += 0.25 * kW[k] * (0.5 - r) * dpi.dot(h_plus.lazyProduct(dpi));
       }
-      c = (std::abs(direct - numerator) <= kink_tolerance ? numerator : direct) / d2;
+      const bool shortcut_holds =
+          path == PathSmoothness::Smooth || std::abs(direct - numerator) <= kink_tolerance;
+      c = (shortcut_holds ? numerator : direct) / d2;
     }
     ws.g_tilde.segment(b * m, m) += c * dpi;
     if (jac) {

@@ -27,8 +27,13 @@
 // shortcuts assume f~ smooth along [pi_0, pi_1]; a mortar gap is only C0
 // where the segmentation changes, and a step across such a kink made them
 // miss the identity by O(|dpi|) (a 3e-6 energy jump in a ring impact). So
-// the direct numerator is always formed too, and used wherever a shortcut
-// differs from it by more than its round-off.
+// where Term::smoothness_between says the path crosses a kink, the numerator is
+// formed straight from its definition, which is exact across it. (An earlier
+// test compared the shortcut with the direct quotient to a tolerance of
+// 1e-6 |grad f~| |dpi|; a kink crossed near an end of the step hid below
+// it, and the identity missed by that much, which drifted the gaps of
+// sliding contact nodes once the constraint rows were written as increments.
+// That test is still what a term gets whose smoothness is Unknown.)
 #pragma once
 
 #include "core/term.hpp"

@@ -52,6 +52,9 @@ class Spring final : public QuadraticFormTerm {
     h(0, 0) = 0.25 * k_ * l0_ / std::pow(pi[0], 1.5);
   }
   bool quadratic_in_invariants() const override { return law_ == SpringLaw::Green; }
+  PathSmoothness smoothness_between(int, const VecRef&, const VecRef&) const override {
+    return PathSmoothness::Smooth;  // for pi = |x_a - x_b|^2 > 0
+  }
   std::string describe() const override {
     return std::string(law_ == SpringLaw::Green ? "green" : "linear") +
            " spring (k = " + std::to_string(k_) + ", L = " + std::to_string(l0_) + ")";

@@ -39,6 +39,8 @@ struct Symmetry {
   bool rotation = true;
 };
 
+enum class PathSmoothness { Smooth, Kink, Unknown };
+
 class Term {
  public:
   /// @param dofs global dof indices, in the order of the local vector q.
@@ -71,6 +73,16 @@ class Term {
   /// True when every f~_b is at most quadratic in pi: then the discrete
   /// gradient equals the gradient at pi_mid and the correction is skipped.
   virtual bool quadratic_in_invariants() const { return false; }
+  /// Whether f~_block is smooth (twice continuously differentiable) along
+  /// the straight path from pi0 to pi1, the discrete gradient's path. Across
+  /// a kink (a mortar gap whose segmentation changes within the step) the
+  /// discrete gradient is formed from the direct quotient, which is exact
+  /// there, instead of the shortcuts that assume smoothness (gradient.hpp);
+  /// Unknown (a user's function) makes it compare the two.
+  virtual PathSmoothness smoothness_between(int /*block*/, const VecRef& /*pi0*/,
+                                            const VecRef& /*pi1*/) const {
+    return PathSmoothness::Unknown;
+  }
   /// True when f depends on time explicitly (driven constraints, loads).
   virtual bool depends_on_time() const { return false; }
   virtual Symmetry symmetry() const { return {}; }
