@@ -317,7 +317,7 @@ ImpactRun impact_run(const std::string& scheme, bool locate, const std::string& 
   const test_systems::RingImpact scene = test_systems::ring_impact(120, 10, 20, 64, 1, 47, 50);
   const System& s = *scene.system;
   SchemeSettings settings;
-  settings.locate_impacts = locate;
+  settings.impact = locate ? ImpactTreatment::Locate : ImpactTreatment::None;
   settings.rtol = settings.atol = ida_tol;
   auto stepper = make_stepper(scheme, s, NewtonSettings{1e-11, 25, false}, settings);
   State st = initial_state(s);

@@ -28,6 +28,7 @@
 #include "cli/default_scene.hpp"
 #include "cli/scene.hpp"
 #include "contact/mortar_contact.hpp"
+#include "integrators/contact_step.hpp"
 #include "integrators/driver.hpp"
 #include "integrators/statics.hpp"
 #include "integrators/stepper.hpp"
@@ -372,7 +373,7 @@ int command_check(const std::string& scene_path, const std::vector<std::string>&
   if (scene->scheme == "ida") own = fmt::format(", rtol {}, atol {}", ss.rtol, ss.atol);
   if (scene->scheme == "galpha") own = fmt::format(", rho_inf {}", ss.rho_inf);
   if (!scene->contacts.empty())
-    own += fmt::format(", impacts {}", ss.locate_impacts ? "located" : "not located") +
+    own += fmt::format(", impacts: {}", impact_treatment_name(ss.impact)) +
            (ss.gap_tolerance > 0 ? fmt::format(", gap tolerance {}", ss.gap_tolerance) : "");
   if (!scene->static_only) {
     row("scheme", fmt::format("{} (Newton tolerance {}, at most {} iterations, line search {}{})",
@@ -438,8 +439,8 @@ void add_dynamic_settings(const Scene& scene, std::vector<std::pair<std::string,
   if (scene.scheme == "galpha")
     s.emplace_back("spectral radius at infinity", fmt::format("{}", scene.scheme_settings.rho_inf));
   if (!scene.contacts.empty())
-    s.emplace_back("contact", fmt::format("{} pair(s), impacts {}located", scene.contacts.size(),
-                                          scene.scheme_settings.locate_impacts ? "" : "not "));
+    s.emplace_back("contact", fmt::format("{} pair(s), impacts: {}", scene.contacts.size(),
+                                          impact_treatment_name(scene.scheme_settings.impact)));
 }
 
 // The scheme and the settings that shape its results, for the report.

@@ -20,6 +20,7 @@
 #include "core/gmsh_reader.hpp"
 #include "core/mesh.hpp"
 #include "core/particles.hpp"
+#include "integrators/contact_step.hpp"
 #include "integrators/stepper.hpp"
 
 namespace emdae {
@@ -501,7 +502,7 @@ void Builder::parse_time(const Fields& f) {
 
 void Builder::parse_scheme(const Fields& f) {
   f.only({"name", "newton_tolerance", "newton_max_iterations", "line_search", "rtol", "atol",
-          "max_order", "rho_inf", "locate_impacts", "gap_tolerance"});
+          "max_order", "rho_inf", "impact", "locate_impacts", "gap_tolerance"});
   if (const auto name = f.optional_string("name")) {
     const auto known = known_schemes();
     if (std::find(known.begin(), known.end(), *name) == known.end()) {
@@ -536,7 +537,19 @@ void Builder::parse_scheme(const Fields& f) {
     ss.rho_inf = *rho;
   }
   only_for("rho_inf", "galpha");
-  ss.locate_impacts = f.boolean("locate_impacts", ss.locate_impacts);
+  if (const auto impact = f.optional_string("impact")) {
+    const auto known = known_impact_treatments();
+    if (std::find(known.begin(), known.end(), *impact) == known.end())
+      f.fail_key("impact", "unknown impact treatment, received " + show(*f.find("impact")) +
+                               hint(*impact, known, "known treatments"));
+    ss.impact = parse_impact_treatment(*impact);
+  }
+  // The older spelling: locate_impacts = true | false is impact = "locate" | "none".
+  if (f.has("locate_impacts")) {
+    if (f.has("impact"))
+      f.fail_key("locate_impacts", "give either scheme.impact or scheme.locate_impacts, not both");
+    ss.impact = f.boolean("locate_impacts", true) ? ImpactTreatment::Locate : ImpactTreatment::None;
+  }
   ss.gap_tolerance = f.optional_non_negative("gap_tolerance").value_or(ss.gap_tolerance);
   scene_.newton.tolerance = f.optional_positive("newton_tolerance").value_or(1e-10);
   const long it = f.integer("newton_max_iterations", 20);

@@ -36,9 +36,11 @@ void Assembler::add_potential_forces(GradientKind kind, const Vec& q0, const Vec
 
 void Assembler::add_constraint_forces(GradientKind kind, const Vec& q0, const Vec& q1, double t0,
                                       double t1, const Vec& lambda, Vec& f, Vec* phi, Triplets* jac,
-                                      long lambda_col, long phi_row, double jac_factor) {
+                                      long lambda_col, long phi_row, double jac_factor,
+                                      Vec* increment) {
   const auto& fixed = s_.is_prescribed();
   if (phi) phi->resize(n_constraints());
+  if (increment) increment->resize(n_constraints());
   for (int l = 0; l < n_constraints(); ++l) {
     const Term& c = constraint(l);
     local(c, kind, q0, q1, t0, t1, jac ? &jac_ : nullptr);
@@ -46,6 +48,10 @@ void Assembler::add_constraint_forces(GradientKind kind, const Vec& q0, const Ve
     for (std::size_t i = 0; i < dofs.size(); ++i)
       f[dofs[i]] += lambda[l] * grad_[static_cast<Eigen::Index>(i)];
     if (phi) (*phi)[l] = c.value(ql1_, t1);
+    if (increment)
+      (*increment)[l] = kind == GradientKind::Discrete && !c.depends_on_time()
+                            ? grad_.dot(ql1_ - ql0_)
+                            : c.value(ql1_, t1) - c.value(ql0_, t0);
     if (!jac) continue;
     scatter_matrix(c, jac_, jac_factor * lambda[l], *jac);
     for (std::size_t i = 0; i < dofs.size(); ++i)

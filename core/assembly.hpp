@@ -30,10 +30,13 @@ class Assembler {
   /// For every constraint l: f += lambda_l G_l(q0, q1) and, with `phi`,
   /// phi_l = Phi_l(q1, t1). With `jac`: jac_factor * lambda_l dG_l/dq1 in the
   /// free rows, G_l as column (lambda_col + l) in the free rows, and the exact
-  /// dPhi_l/dq(q1) as row (phi_row + l).
+  /// dPhi_l/dq(q1) as row (phi_row + l). With `increment`: increment_l =
+  /// Phi_l(q1) - Phi_l(q0), for the Discrete kind as G_l . (q1 - q0), equal
+  /// in exact arithmetic (the discrete gradient's identity) and with a
+  /// round-off relative to |q1 - q0| instead of |q| (see midpoint_family.cpp).
   void add_constraint_forces(GradientKind kind, const Vec& q0, const Vec& q1, double t0, double t1,
                              const Vec& lambda, Vec& f, Vec* phi, Triplets* jac, long lambda_col,
-                             long phi_row, double jac_factor = 1.0);
+                             long phi_row, double jac_factor = 1.0, Vec* increment = nullptr);
 
   /// Phi(q, t), one entry per constraint.
   void constraint_values(const Vec& q, double t, Vec& phi);

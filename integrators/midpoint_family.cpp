@@ -19,7 +19,7 @@ class MidpointFamilyStepper::Problem final : public NewtonProblem {
   // otherwise above 1/eps^(2/3) and made SUNLinSol_KLU redo a full
   // factorization after each cheap numeric refactorization.
   Problem(const System& s, GradientKind kind, const State& start, double dt,
-          const std::vector<const Term*>& extra, const Vec& stiffness_diag,
+          const std::vector<const Term*>& extra, const Vec& targets, const Vec& stiffness_diag,
           const Vec& full_stiffness)
       : s_(s),
         kind_(kind),
@@ -29,7 +29,10 @@ class MidpointFamilyStepper::Problem final : public NewtonProblem {
         t0_(start.t),
         t1_(start.t + dt),
         dt_(dt),
-        k_(stiffness_diag) {
+        k_(stiffness_diag),
+        targets_(Vec::Zero(s.n_constraints() + static_cast<Eigen::Index>(extra.size()))) {
+    targets_.tail(targets.size()) = targets;
+    assembler_.constraint_values(q0_, t0_, phi0_);
     double sum = 0.0;
     int count = 0;
     const Vec& m = s_.lumped_mass();
@@ -37,6 +40,7 @@ class MidpointFamilyStepper::Problem final : public NewtonProblem {
       if (!s_.is_prescribed()[static_cast<std::size_t>(i)])
         sum += 2.0 * m[i] / (dt * dt) + full_stiffness[i], ++count;
     kappa_ = count ? sum / count : 1.0;
+    kinetic0_ = 0.5 * v0_.dot(s_.mass() * v0_);
   }
 
   double kappa() const { return kappa_; }
@@ -51,14 +55,25 @@ class MidpointFamilyStepper::Problem final : public NewtonProblem {
     f.resize(size());
     Vec fq = (2.0 / (dt_ * dt_)) * (s_.mass() * (q1 - q0_ - dt_ * v0_));
     assembler_.add_potential_forces(kind_, q0_, q1, t0_, t1_, fq, nullptr);
-    assembler_.add_constraint_forces(kind_, q0_, q1, t0_, t1_, lambda, fq, &phi_, nullptr, n, n);
+    assembler_.add_constraint_forces(kind_, q0_, q1, t0_, t1_, lambda, fq, &phi_, nullptr, n, n,
+                                     1.0, &increment_);
     if (!s_.loads().empty()) {
       load_.setZero(n);
       s_.add_load_forces(load_point(q1), load_time(), load_);
       fq -= load_;
     }
     f.head(n) = fq;
-    f.tail(m) = kappa_ * phi_;
+    // The system's constraints: Phi(q1) = 0. Contact rows: Phi(q0) +
+    // (Phi(q1) - Phi(q0)) = target, with the increment G . (q1 - q0) for
+    // the discrete gradient. Under persistency (target = Phi(q0)) the row is
+    // the increment alone, and lambda times its residual, the energy it
+    // leaves, is then round-off of |q1 - q0| rather than of |q|: in a sub-step
+    // of 1e-9 with lambda = 1.6e5 (a node reversing its normal velocity) the
+    // plain Phi(q1) left 2e-12 of energy, 1.5e-9 of the blocks' total.
+    const int ms = s_.n_constraints();
+    f.tail(m).head(ms) = kappa_ * phi_.head(ms);
+    f.tail(m).tail(m - ms) =
+        kappa_ * (phi0_.tail(m - ms) + increment_.tail(m - ms) - targets_.tail(m - ms));
     for (const auto& p : s_.prescribed())
       f[p.dof] = kappa_ * (q1[p.dof] - (p.position ? p.position(t1_) : q0_[p.dof]));
   }
@@ -83,6 +98,33 @@ class MidpointFamilyStepper::Problem final : public NewtonProblem {
     for (const auto& p : s_.prescribed()) trip_.emplace_back(p.dof, p.dof, kappa_);
     j.resize(size(), size());
     j.setFromTriplets(trip_.begin(), trip_.end());
+  }
+
+  // The energy the residual leaves in the step (NewtonProblem): with
+  // R_q = 2/dt^2 M (q1 - q0 - dt v0) + F and v1 from M (v1 - v0) = -dt F,
+  //   H1 - H0 - W = -sum_A lambda_A (Phi_A(q1) - target_A) + e . F,
+  //   e = q1 - q0 - dt/2 (v0 + v1) = dt^2/2 M^-1 R_q
+  // (plus the targets' own lambda (target - Phi(q0)), zero under
+  // persistency). M^-1 is taken lumped here: this is a stopping test.
+  // Relative to the kinetic energy at the start plus the work of the
+  // forces in the step, sum |F_i dq_i|. Statics (stiffness-scaled rows) has
+  // no such balance.
+  double energy_residual(const Vec& x, const Vec& f) const override {
+    if (k_.size() && k_.any()) return 0.0;
+    const int n = s_.n_dofs();
+    const Vec dq = x.head(n) - q0_;
+    const Vec inertia = (2.0 / (dt_ * dt_)) * (s_.mass() * (dq - dt_ * v0_));
+    const Vec& m = s_.lumped_mass();
+    double error = 0.0, scale = kinetic0_;
+    for (int i = 0; i < n; ++i) {
+      if (s_.is_prescribed()[static_cast<std::size_t>(i)]) continue;
+      const double force = f[i] - inertia[i];
+      error += dt_ * dt_ / (2.0 * m[i]) * f[i] * force;
+      scale += std::abs(force * dq[i]);
+    }
+    const int mc = assembler_.n_constraints();
+    error -= f.tail(mc).dot(x.tail(mc));  // (Phi - target) lambda
+    return scale > 0.0 ? std::abs(error) / scale : 0.0;
   }
 
   // Where the loads act: at the midpoint for the midpoint and discrete
@@ -111,7 +153,10 @@ class MidpointFamilyStepper::Problem final : public NewtonProblem {
   const Vec& v0_;
   double t0_, t1_, dt_;
   const Vec& k_;
+  Vec targets_;           // Phi(q1) = target: 0 for the system's constraints
+  Vec phi0_, increment_;  // Phi(q0), Phi(q1) - Phi(q0)
   double kappa_ = 1.0;
+  double kinetic0_ = 0.0;
   Vec phi_, force_, load_;
   Triplets trip_;
 };
@@ -122,7 +167,8 @@ MidpointFamilyStepper::MidpointFamilyStepper(const System& system, GradientKind 
       kind_(kind),
       newton_(newton),
       scheme_(scheme),
-      gap_tol_(scheme.gap_tolerance > 0 ? scheme.gap_tolerance : newton.tolerance) {
+      contact_(system, scheme.gap_tolerance > 0 ? scheme.gap_tolerance : newton.tolerance,
+               scheme.impact) {
   system_.validate();
   const int n = system_.n_dofs();
   {
@@ -217,14 +263,16 @@ void MidpointFamilyStepper::velocity_from_momentum_balance(const State& start, c
   resultant_and_moment(dim, qm, impulse, external_impulse_, external_angular_impulse_);
 }
 
-StepStats MidpointFamilyStepper::solve(State& state, double dt) {
+StepStats MidpointFamilyStepper::solve_substep(State& state, double dt, const Vec& targets,
+                                               const SolveGuess* guess) {
   const int n = system_.n_dofs();
   const std::vector<const Term*> extra = active_terms(state.active);
   const int m = system_.n_constraints() + static_cast<int>(extra.size());
-  Problem problem(system_, kind_, state, dt, extra, stiffness_diag_, full_stiffness_diag_);
+  Problem problem(system_, kind_, state, dt, extra, targets, stiffness_diag_, full_stiffness_diag_);
   Vec x(n + m);
-  x.head(n) = state.q + dt * state.v;
-  x.tail(m) = state.lambda.size() == m ? Vec(state.lambda / problem.kappa()) : Vec::Zero(m);
+  x.head(n) = guess ? guess->q : Vec(state.q + dt * state.v);
+  const Vec& lambda0 = guess && guess->lambda.size() == m ? guess->lambda : state.lambda;
+  x.tail(m) = lambda0.size() == m ? Vec(lambda0 / problem.kappa()) : Vec::Zero(m);
   const NewtonResult r = newton_.solve(problem, x, problem.scale());
   x.tail(m) *= problem.kappa();
   StepStats stats;
@@ -246,197 +294,19 @@ StepStats MidpointFamilyStepper::solve(State& state, double dt) {
   return stats;
 }
 
-double MidpointFamilyStepper::min_inactive_gap(const State& s, const Vec& q,
-                                               std::vector<int>* below, double threshold) const {
-  double g = std::numeric_limits<double>::infinity();
-  for (int id = 0; id < system_.n_unilateral(); ++id) {
-    if (std::find(s.active.begin(), s.active.end(), id) != s.active.end()) continue;
-    const double gi = system_.unilateral_gap(id, q);
-    g = std::min(g, gi);
-    if (below && gi < threshold) below->push_back(id);
-  }
-  return g;
-}
-
-StepStats MidpointFamilyStepper::contact_substep(State& s, double dt) {
-  const int n_static = system_.n_constraints();
-  StepStats total;
-  total.converged = true;
-  auto accumulate = [&](const StepStats& r) {
-    total.iterations += r.iterations;
-    total.residual = std::max(total.residual, r.residual);
-    total.message = r.message;
-  };
-  // Only the accepted solve's work counts (trials and location solves are discarded).
-  // Nodes no longer engaged (nothing of the master opposite) leave the set.
-  for (std::size_t k = s.active.size(); k-- > 0;)
-    if (!std::isfinite(system_.unilateral_gap(s.active[k], s.q)))
-      deactivate_candidate(s, n_static, k);
-  // Inactive nodes already touching at t_n enter now (their gap is closed).
-  {
-    std::vector<int> touching;
-    min_inactive_gap(s, s.q, &touching, gap_tol_);
-    for (int id : touching) activate_candidate(s, id);
-  }
-
-  std::vector<int> released;  // released in this sub-step: not released twice
-  std::vector<int> pinned;    // re-activated after a release: kept active
-  for (int attempt = 0; attempt < 4 * system_.n_unilateral() + 8; ++attempt) {
-    State trial = s;
-    const StepStats r = solve(trial, dt);
-    accumulate(r);
-    if (!r.converged) {
-      total.converged = false;
-      total.contact_events = 0;
-      return total;
-    }
-    // 1. Release active nodes whose multiplier turned tensile.
-    bool changed = false;
-    for (std::size_t k = s.active.size(); k-- > 0;) {
-      const int id = s.active[k];
-      if (trial.lambda[n_static + static_cast<Eigen::Index>(k)] > 0.0 &&
-          std::find(pinned.begin(), pinned.end(), id) == pinned.end()) {
-        released.push_back(id);
-        deactivate_candidate(s, n_static, k);
-        ++total.contact_events;
-        changed = true;
-      }
-    }
-    if (changed) continue;
-    // 2. Inactive nodes penetrating at the end of the step.
-    std::vector<int> penetrating;
-    min_inactive_gap(s, trial.q, &penetrating, -gap_tol_);
-    if (penetrating.empty()) {
-      s = trial;
-      total.external_work = r.external_work;
-      total.external_impulse = r.external_impulse;
-      total.external_angular_impulse = r.external_angular_impulse;
-      return total;
-    }
-    // A node that was closed at t_n (released in this sub-step, or touching)
-    // and penetrates now re-enters for the whole sub-step at no energy cost:
-    // lambda (Phi(q_{n+1}) - Phi(q_n)) = 0 with both gaps zero. It is not
-    // released again in this sub-step (no chattering).
-    bool reentered = false;
-    for (int id : penetrating)
-      if (system_.unilateral_gap(id, s.q) <= gap_tol_) {
-        pinned.push_back(id);
-        activate_candidate(s, id);
-        reentered = true;
-      }
-    if (reentered) continue;
-
-    // Every penetrating node was open at t_n: an impact inside the sub-step.
-    if (scheme_.locate_impacts) {
-      // The nodes that can hit: inactive and open at t_n.
-      std::vector<int> open;
-      for (int id = 0; id < system_.n_unilateral(); ++id)
-        if (std::find(s.active.begin(), s.active.end(), id) == s.active.end() &&
-            system_.unilateral_gap(id, s.q) > gap_tol_)
-          open.push_back(id);
-      auto first_gap = [&](const Vec& q) {
-        double g = std::numeric_limits<double>::infinity();
-        for (int id : open) g = std::min(g, system_.unilateral_gap(id, q));
-        return g;
-      };
-      // Illinois false position for tau in (0, dt) with min gap(q(tau)) = 0.
-      double a = 0.0, fa = first_gap(s.q), b = dt, fb = first_gap(trial.q);
-      int side = 0;
-      for (int it = 0; it < 60; ++it) {
-        // Bisection while a node is not yet engaged at the left end (its gap
-        // is +infinity there: a fast node that comes opposite the master
-        // surface within the step).
-        const double tau = std::isfinite(fa) ? (a * fb - b * fa) / (fb - fa) : 0.5 * (a + b);
-        State sub = s;
-        const StepStats rs = solve(sub, tau);
-        accumulate(rs);
-        if (!rs.converged) {
-          total.converged = false;
-          total.message = "impact location: " + rs.message;
-          return total;
-        }
-        const double fc = first_gap(sub.q);
-        // A node closed at t_n (released in this sub-step) that penetrates
-        // at tau re-enters for the whole sub-step, at no energy cost (both
-        // its gaps closed), and is not released again in it; the sub-step is
-        // solved again. Without this the next sub-step started with it
-        // penetrating (a 4e-5 energy jump at closing speed 40).
-        for (int id = 0; id < system_.n_unilateral(); ++id)
-          if (std::find(s.active.begin(), s.active.end(), id) == s.active.end() &&
-              std::find(open.begin(), open.end(), id) == open.end() &&
-              system_.unilateral_gap(id, sub.q) < -gap_tol_) {
-            pinned.push_back(id);
-            activate_candidate(s, id);
-            reentered = true;
-          }
-        if (reentered) break;
-        if (std::abs(fc) <= gap_tol_ || b - a <= 1e-14 * dt) {
-          for (int id : open)
-            if (system_.unilateral_gap(id, sub.q) <= gap_tol_) activate_candidate(sub, id);
-          ++total.contact_events;
-          s = sub;
-          total.external_work = rs.external_work;
-          total.external_impulse = rs.external_impulse;
-          total.external_angular_impulse = rs.external_angular_impulse;
-          return total;
-        }
-        if (fc < 0) {
-          b = tau, fb = fc;
-          if (side == -1) fa *= 0.5;
-          side = -1;
-        } else {
-          a = tau, fa = fc;
-          if (side == +1) fb *= 0.5;
-          side = +1;
-        }
-      }
-      if (reentered) continue;
-      total.converged = false;
-      total.message = "impact location did not converge";
-      return total;
-    }
-    for (int id : penetrating) activate_candidate(s, id);
-    ++total.contact_events;
-  }
-  total.converged = false;
-  total.message = "active set did not settle";
-  return total;
+Vec MidpointFamilyStepper::inverse_mass(const Vec& f) const {
+  Vec rhs(static_cast<Eigen::Index>(free_.size()));
+  for (std::size_t i = 0; i < free_.size(); ++i) rhs[static_cast<Eigen::Index>(i)] = f[free_[i]];
+  const Vec w = m_ff_.solve(rhs);
+  Vec out = Vec::Zero(f.size());
+  for (std::size_t i = 0; i < free_.size(); ++i) out[free_[i]] = w[static_cast<Eigen::Index>(i)];
+  return out;
 }
 
 StepStats MidpointFamilyStepper::step(State& state, double dt) {
-  if (system_.n_unilateral() == 0) return solve(state, dt);
+  if (system_.n_unilateral() == 0) return solve_substep(state, dt, Vec(), nullptr);
   for (const auto& set : system_.unilateral()) set->prepare(state.q, state.v, dt);
-  State s = state;
-  const double t_end = state.t + dt;
-  StepStats total;
-  total.converged = true;
-  for (int sub = 0; s.t < t_end - 1e-12 * dt; ++sub) {
-    if (sub > 4 * system_.n_unilateral() + 8) {
-      total.converged = false;
-      total.message = "too many contact events in one step";
-      return total;
-    }
-    const StepStats r = contact_substep(s, t_end - s.t);
-    total.iterations += r.iterations;
-    total.residual = std::max(total.residual, r.residual);
-    total.contact_events += r.contact_events;
-    total.message = r.message;
-    if (!r.converged) {  // a failed sub-step has no work or impulses
-      total.converged = false;
-      return total;
-    }
-    total.external_work += r.external_work;
-    if (total.external_impulse.size() == 0) {
-      total.external_impulse = r.external_impulse;
-      total.external_angular_impulse = r.external_angular_impulse;
-    } else {
-      total.external_impulse += r.external_impulse;
-      total.external_angular_impulse += r.external_angular_impulse;
-    }
-  }
-  s.t = t_end;  // sub-steps add up to dt up to round-off
-  state = std::move(s);
-  return total;
+  return contact_.step(*this, state, dt);
 }
 
 }  // namespace emdae

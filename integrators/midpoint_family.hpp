@@ -36,45 +36,36 @@
 // balance; their work in the step, W = f . (q_{n+1} - q_n), is returned in
 // StepStats so that the report can check H_{n+1} - H_n = W.
 //
-// Contact (unilateral constraints) is handled by an active set inside the
-// step: the active candidates' constraints are enforced as equalities; a node
-// whose multiplier turns tensile is released and the step repeated; an
-// inactive node found penetrating at the end of the step is an impact. With
-// `locate_impacts`, the step is then cut at the instant tau where the first
-// gap closes (found by Illinois false position on tau, each trial a full
-// solve), the node is activated there with Phi(q) = 0, and the rest of the
-// step follows: so lambda (Phi(q_{n+1}) - Phi(q_n)) vanishes for every node in
-// every sub-step and the energy-momentum scheme conserves energy through the
-// impact. Without it the node is activated for the whole step and the energy
-// error -lambda Phi(q_n) appears (the comparison the contact tests make).
+// Contact (unilateral constraints): the active set inside the step and the
+// impact treatment are integrators/contact_step.hpp's; this class solves
+// (sub-)steps of any length for it, with each active node's constraint
+// Phi_A(q_{n+1}) = target_A (integrators/active_set.hpp: discrete
+// persistency, which keeps lambda (Phi(q_{n+1}) - Phi(q_n)) out of the
+// energy balance).
 #pragma once
 
 #include <Eigen/SparseCholesky>
 
 #include "core/gradient.hpp"
+#include "integrators/contact_step.hpp"
 #include "integrators/stepper.hpp"
 
 namespace emdae {
 
-class MidpointFamilyStepper : public Stepper {
+class MidpointFamilyStepper : public Stepper, public SubstepScheme {
  public:
   MidpointFamilyStepper(const System& system, GradientKind kind, NewtonSettings newton,
                         SchemeSettings scheme);
   StepStats step(State& state, double dt) override;
 
   KluSolver::Counters klu_counters() const { return newton_.klu_counters(); }
+  const ImpactCounters& impact_counters() const { return contact_.counters(); }
+
+  StepStats solve_substep(State& s, double h, const Vec& targets, const SolveGuess* guess) override;
+  Vec inverse_mass(const Vec& f) const override;
 
  private:
   class Problem;
-  /// One solve from `s` over dt with the active set s.active; on success `s`
-  /// is advanced.
-  StepStats solve(State& s, double dt);
-  /// One contact sub-step: solves, releases and activates until the active
-  /// set is consistent, possibly ending early at an impact.
-  StepStats contact_substep(State& s, double dt);
-  /// Min of Phi over the inactive candidates that have a function, at q.
-  double min_inactive_gap(const State& s, const Vec& q, std::vector<int>* below = nullptr,
-                          double threshold = 0.0) const;
   void velocity_from_momentum_balance(const State& start, const Vec& q1, const Vec& lambda,
                                       const std::vector<const Term*>& extra, double dt, Vec& v1,
                                       double& work);
@@ -84,7 +75,7 @@ class MidpointFamilyStepper : public Stepper {
   GradientKind kind_;
   NewtonSolver newton_;
   SchemeSettings scheme_;
-  double gap_tol_;
+  ContactStepper contact_;
   Vec stiffness_diag_;       // |K_ii| at the initial configuration, if scaling by it
   Vec full_stiffness_diag_;  // |K_ii| at the initial configuration
   Vec external_impulse_, external_angular_impulse_;  // of the last solve

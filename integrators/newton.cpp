@@ -173,13 +173,52 @@ NewtonResult NewtonSolver::solve(NewtonProblem& problem, Vec& x, const Vec& resi
   Eigen::Map<Vec>(N_VGetArrayPointer(m.u), n) = x;
   Eigen::Map<Vec>(N_VGetArrayPointer(m.fscale), n) = residual_scale;
 
-  const int flag =
-      KINSol(m.kin, m.u, settings_.line_search ? KIN_LINESEARCH : KIN_NONE, m.uscale, m.fscale);
-  m.problem = nullptr;
-  if (m.error) std::rethrow_exception(m.error);
-
+  const int strategy = settings_.line_search ? KIN_LINESEARCH : KIN_NONE;
+  int flag = KINSol(m.kin, m.u, strategy, m.uscale, m.fscale);
+  if (m.error) {
+    m.problem = nullptr;
+    std::rethrow_exception(m.error);
+  }
   long iters = 0;
   KINGetNumNonlinSolvIters(m.kin, &iters);
+
+  // Converged on the tolerance: go on, one iteration at a time, while the
+  // residual still leaves more energy in the step than energy_tolerance and
+  // Newton can still make progress (a step above round-off).
+  if ((flag == KIN_SUCCESS || flag == KIN_INITIAL_GUESS_OK) && settings_.energy_tolerance > 0) {
+    long extra = 0;
+    while (iters + extra < settings_.max_iterations) {
+      const Vec xu = Eigen::Map<const Vec>(N_VGetArrayPointer(m.u), n);
+      if (xu != m.x) problem.residual(xu, m.f);  // the last evaluation was elsewhere
+      if (problem.energy_residual(xu, m.f) <= settings_.energy_tolerance) break;
+      const double residual_before = (m.f.array() * m.scale.array()).abs().maxCoeff();
+      check(KINSetFuncNormTol(m.kin, 1e-300), "KINSetFuncNormTol");
+      check(KINSetNumMaxIters(m.kin, 1), "KINSetNumMaxIters");
+      const int more = KINSol(m.kin, m.u, strategy, m.uscale, m.fscale);
+      long it = 0;
+      KINGetNumNonlinSolvIters(m.kin, &it);
+      extra += it;
+      if (m.error || more < 0 || it == 0) break;
+      // An iteration at round-off may make the residual a little worse:
+      // keep the better iterate then, and stop.
+      if (m.last_residual > std::max(residual_before, settings_.tolerance)) {
+        Eigen::Map<Vec>(N_VGetArrayPointer(m.u), n) = xu;
+        problem.residual(xu, m.f);
+        m.x = xu;
+        m.last_residual = residual_before;
+        break;
+      }
+      if (more == KIN_STEP_LT_STPTOL) break;  // round-off: nothing left to gain
+    }
+    check(KINSetFuncNormTol(m.kin, settings_.tolerance), "KINSetFuncNormTol");
+    check(KINSetNumMaxIters(m.kin, settings_.max_iterations), "KINSetNumMaxIters");
+    if (m.error) {
+      m.problem = nullptr;
+      std::rethrow_exception(m.error);
+    }
+    iters += extra;
+  }
+  m.problem = nullptr;
   x = Eigen::Map<const Vec>(N_VGetArrayPointer(m.u), n);
 
   NewtonResult r;

@@ -109,7 +109,7 @@ class PseudoTransientStepper final : public MidpointFamilyStepper {
 
 StaticResult solve_static_held(const System& system, State& state, const StaticSettings& settings) {
   SchemeSettings scheme;
-  scheme.locate_impacts = false;  // an initial overlap is pushed apart, not "hit"
+  scheme.impact = ImpactTreatment::None;  // an initial overlap is pushed apart, not "hit"
   scheme.stiffness_scaled_residual = true;
   // Forces at the end of each pseudo step (implicit, dissipative): with the
   // midpoint or discrete gradient the fixed point would be an equilibrium of

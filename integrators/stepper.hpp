@@ -45,7 +45,11 @@ struct StepStats {
   int iterations = 0;
   double residual = 0.0;
   std::string message;
-  int contact_events = 0;      // impacts located (sub-steps) and releases within the step
+  // Contact events of the step (integrators/active_set.hpp): entries and
+  // exits over its accepted sub-steps, and their sum.
+  int contact_events = 0;
+  int contact_entries = 0;
+  int contact_exits = 0;
   double external_work = 0.0;  // work of the loads over the step
   // Impulse of the loads and of the supports (prescribed dofs) over the
   // step, and their moments about the origin (2D: one component): the
@@ -64,20 +68,21 @@ class Stepper {
 /// Names accepted by make_stepper, in the order shown to users.
 std::vector<std::string> known_schemes();
 
+/// What em and midpoint do when a node hits (integrators/contact_step.hpp);
+/// generalized-alpha and IDA make every node impact inelastic.
+enum class ImpactTreatment { Locate, VelocityUpdate, None };
+
 /// Settings of the schemes that have their own: IDA's local error tolerances
 /// (on q and v), generalized-alpha's spectral radius at infinity.
 struct SchemeSettings {
   double rtol = 1e-8, atol = 1e-8;  // "ida"
   int max_order = 5;                // "ida": highest BDF order, 1..5
   double rho_inf = 1.0;             // "galpha", in [0, 1]
-  // Contact ("em", "midpoint"): locate each impact and end a sub-step there
-  // so that a node enters contact with a closed gap (energy treatment), and
-  // the gap below which an inactive candidate counts as touching (0: the
-  // Newton tolerance for "em"/"midpoint", 10 times it for "galpha", 10 atol
-  // for "ida"). A node enters with a gap up to this, which costs lambda
-  // times it in energy: 1e-10 rather than 1e-9 took the paper's ring impact
-  // from 5e-9 to 3e-10.
-  bool locate_impacts = true;
+  // Contact: what em and midpoint do at an impact (locate it, or correct
+  // the velocities, or neither), and the gap within which a candidate counts
+  // as closed (0: the Newton tolerance for "em"/"midpoint", 10 times it for
+  // "galpha", 10 atol for "ida"). A node may enter with a gap up to this.
+  ImpactTreatment impact = ImpactTreatment::Locate;
   double gap_tolerance = 0.0;
   // Scale residuals by the Newton matrix's diagonal (statics) instead of the
   // inertial dt^2 / (2 m_i) (dynamics); see midpoint_family.hpp.

@@ -128,7 +128,7 @@ ImpactFigures run_impact(const RingImpact& scene, const char* scheme, double dt,
                          bool locate) {
   const System& s = *scene.system;
   SchemeSettings settings;
-  settings.locate_impacts = locate;
+  settings.impact = locate ? ImpactTreatment::Locate : ImpactTreatment::None;
   auto stepper = make_stepper(scheme, s, NewtonSettings{1e-11, 25, false}, settings);
   State st = initial_state(s);
   const Quantities q0 = measure(s, st.q, st.v, 0);

@@ -1,0 +1,104 @@
+#include "integrators/active_set.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+
+#include "core/gradient.hpp"
+
+namespace emdae {
+
+namespace {
+
+bool contains(const std::vector<int>& v, int id) {
+  return std::find(v.begin(), v.end(), id) != v.end();
+}
+
+}  // namespace
+
+Transitions transitions(const std::vector<int>& before, const std::vector<int>& after) {
+  Transitions t;
+  for (int id : after) t.entries += contains(before, id) ? 0 : 1;
+  for (int id : before) t.exits += contains(after, id) ? 0 : 1;
+  return t;
+}
+
+void release_candidate(State& s, std::size_t k) {
+  const Eigen::Index n_static = s.lambda.size() - static_cast<Eigen::Index>(s.active.size());
+  deactivate_candidate(s, static_cast<int>(n_static), k);
+}
+
+ActiveSet::ActiveSet(const System& system, double gap_tolerance)
+    : system_(system), tol_(gap_tolerance), n_static_(system.n_constraints()) {
+  if (!(gap_tolerance > 0.0) || !std::isfinite(gap_tolerance))
+    throw std::invalid_argument("ActiveSet: the gap tolerance must be positive, received " +
+                                std::to_string(gap_tolerance));
+}
+
+bool ActiveSet::is_active(const State& s, int id) const {
+  return contains(s.active, id);
+}
+
+double ActiveSet::gap_rate(int id, const Vec& q, const Vec& v) const {
+  const Term* term = system_.unilateral_term(id);
+  if (!term || !std::isfinite(gap(id, q))) return 0.0;
+  Vec ql, vl, grad;
+  gather(*term, q, ql);
+  gather(*term, v, vl);
+  TermWorkspace ws;
+  term_gradient(*term, GradientKind::Exact, ql, ql, 0.0, 0.0, grad, nullptr, ws);
+  return grad.dot(vl);
+}
+
+Transitions ActiveSet::begin(State& s) const {
+  const std::vector<int> before = s.active;
+  for (std::size_t k = s.active.size(); k-- > 0;)
+    if (!std::isfinite(gap(s.active[k], s.q))) release_candidate(s, k);
+  for (int id = 0; id < system_.n_unilateral(); ++id)
+    if (!is_active(s, id) && std::abs(gap(id, s.q)) <= tol_) activate_candidate(s, id);
+  return transitions(before, s.active);
+}
+
+std::vector<std::size_t> ActiveSet::tensile(const State& s, const Vec& lambda,
+                                            const std::vector<int>& keep) const {
+  std::vector<std::size_t> out;
+  for (std::size_t k = s.active.size(); k-- > 0;)
+    if (lambda[n_static_ + static_cast<Eigen::Index>(k)] > 0.0 && !contains(keep, s.active[k]))
+      out.push_back(k);
+  return out;
+}
+
+std::vector<int> ActiveSet::penetrating(const State& s, const Vec& q) const {
+  std::vector<int> out;
+  for (int id = 0; id < system_.n_unilateral(); ++id)
+    if (!is_active(s, id) && gap(id, q) < -tol_) out.push_back(id);
+  return out;
+}
+
+std::vector<int> ActiveSet::open(const State& s, const Vec& q) const {
+  std::vector<int> out;
+  for (int id = 0; id < system_.n_unilateral(); ++id) {
+    if (is_active(s, id)) continue;
+    const double g = gap(id, q);
+    if (g > tol_ && std::isfinite(g)) out.push_back(id);
+  }
+  return out;
+}
+
+Vec ActiveSet::targets(const State& s) const {
+  Vec t(static_cast<Eigen::Index>(s.active.size()));
+  for (std::size_t k = 0; k < s.active.size(); ++k) {
+    const double g = gap(s.active[k], s.q);
+    t[static_cast<Eigen::Index>(k)] = std::abs(g) <= tol_ ? g : 0.0;
+  }
+  return t;
+}
+
+double ActiveSet::min_gap(const std::vector<int>& ids, const Vec& q) const {
+  double g = std::numeric_limits<double>::infinity();
+  for (int id : ids) g = std::min(g, gap(id, q));
+  return g;
+}
+
+}  // namespace emdae

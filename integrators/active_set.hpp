@@ -1,0 +1,94 @@
+// Who is in contact: the decisions every stepper with contact makes, in one
+// place (em, midpoint and generalized-alpha through it; IDA keeps its root
+// functions but counts and classifies with the same rules).
+//
+// A unilateral candidate (a slave node) is, at a configuration q,
+//  - closed   when |Phi(q)| <= gap tolerance: it may enter with no impact;
+//  - open     when Phi(q) > gap tolerance;
+//  - penetrating when Phi(q) < -gap tolerance: an inactive node found so at
+//    the end of a (sub-)step has hit within it;
+//  - tensile  when active and its multiplier lambda > 0 (core/unilateral.hpp:
+//    lambda < 0 is compressive): it leaves.
+// Engagement (Phi finite, i.e. something of the master lies opposite) is a
+// precondition of being active.
+//
+// Targets. An active node's constraint for a (sub-)step from q_0 to q_1 is
+// Phi(q_1) = target, with target = Phi(q_0) when that is closed and 0
+// otherwise. The first is discrete persistency: Phi does not change over the
+// step, so lambda (Phi(q_1) - Phi(q_0)), the contact work in the energy
+// balance of the energy-momentum scheme, is zero to the Newton tolerance
+// however large lambda is. The gap a node entered with (at most the gap
+// tolerance) is kept while it stays active, instead of being closed at the
+// price lambda Phi(q_0): that price was what lost energy in very short
+// sub-steps (lambda ~ 2 m v / tau as tau -> 0; the flat-face blocks lost
+// 3e-4 of their energy in one sub-step of 2e-8). A node entering open (no
+// impact location) is pulled to Phi = 0 at the end of the step.
+//
+// Events. A contact event is an entry (a node inactive at the start of an
+// accepted (sub-)step and active at its end) or an exit (the reverse).
+// Trial releases that are taken back within the step, and the solves that
+// locate an impact, are not events: the count is what a reader of the
+// accepted states would see, sub-step by sub-step.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "integrators/stepper.hpp"
+
+namespace emdae {
+
+/// Entries and exits between two active sets (see the header comment).
+struct Transitions {
+  int entries = 0;
+  int exits = 0;
+  int total() const { return entries + exits; }
+};
+
+Transitions transitions(const std::vector<int>& before, const std::vector<int>& after);
+
+class ActiveSet {
+ public:
+  /// @param gap_tolerance  > 0: the band [-tol, tol] in which a gap counts as closed.
+  ActiveSet(const System& system, double gap_tolerance);
+
+  double gap_tolerance() const { return tol_; }
+  const System& system() const { return system_; }
+
+  bool is_active(const State& s, int id) const;
+  /// Phi_id(q) for the prepared step (+infinity when not engaged).
+  double gap(int id, const Vec& q) const { return system_.unilateral_gap(id, q); }
+  /// d Phi_id / dt along velocity v at q (0 when not engaged).
+  double gap_rate(int id, const Vec& q, const Vec& v) const;
+
+  /// Start of a (sub-)step: active nodes no longer engaged leave; inactive
+  /// nodes closed at s.q enter. Returns the transitions made.
+  Transitions begin(State& s) const;
+
+  /// Active nodes (positions in s.active) whose multiplier in `lambda`
+  /// (laid out as in s.lambda) is tensile, `keep` excepted; descending order,
+  /// so that they can be removed one after another.
+  std::vector<std::size_t> tensile(const State& s, const Vec& lambda,
+                                   const std::vector<int>& keep) const;
+  /// Inactive, engaged candidates with Phi(q) < -tol.
+  std::vector<int> penetrating(const State& s, const Vec& q) const;
+  /// Inactive, engaged candidates with Phi(q) > tol.
+  std::vector<int> open(const State& s, const Vec& q) const;
+
+  /// The targets of the active nodes for a (sub-)step starting at s (see
+  /// the header comment), in the order of s.active.
+  Vec targets(const State& s) const;
+
+  /// Minimum of Phi over `ids` at q (+infinity when empty).
+  double min_gap(const std::vector<int>& ids, const Vec& q) const;
+
+ private:
+  const System& system_;
+  double tol_;
+  int n_static_;
+};
+
+/// Removes position k of s.active, with its multiplier.
+void release_candidate(State& s, std::size_t k);
+
+}  // namespace emdae

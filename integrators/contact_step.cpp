@@ -1,0 +1,369 @@
+#include "integrators/contact_step.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+
+#include "core/gradient.hpp"
+#include "core/quantities.hpp"
+
+namespace emdae {
+
+std::vector<std::string> known_impact_treatments() {
+  return {"locate", "velocity_update", "none"};
+}
+
+std::string impact_treatment_name(ImpactTreatment t) {
+  switch (t) {
+    case ImpactTreatment::Locate:
+      return "locate";
+    case ImpactTreatment::VelocityUpdate:
+      return "velocity_update";
+    case ImpactTreatment::None:
+      return "none";
+  }
+  return "unknown";
+}
+
+ImpactTreatment parse_impact_treatment(const std::string& name) {
+  if (name == "locate") return ImpactTreatment::Locate;
+  if (name == "velocity_update") return ImpactTreatment::VelocityUpdate;
+  if (name == "none") return ImpactTreatment::None;
+  throw std::invalid_argument("unknown impact treatment '" + name +
+                              "' (known: locate, velocity_update, none)");
+}
+
+namespace {
+
+bool contains(const std::vector<int>& v, int id) {
+  return std::find(v.begin(), v.end(), id) != v.end();
+}
+
+void add_up(StepStats& total, const StepStats& r) {
+  total.iterations += r.iterations;
+  total.residual = std::max(total.residual, r.residual);
+  total.message = r.message;
+}
+
+// The work and impulses of an accepted (sub-)step go into the step's.
+void add_accepted(StepStats& total, const StepStats& r) {
+  total.external_work += r.external_work;
+  if (r.external_impulse.size() == 0) return;
+  if (total.external_impulse.size() == 0) {
+    total.external_impulse = r.external_impulse;
+    total.external_angular_impulse = r.external_angular_impulse;
+  } else {
+    total.external_impulse += r.external_impulse;
+    total.external_angular_impulse += r.external_angular_impulse;
+  }
+}
+
+// Smallest root in (0, 1) of the cubic Hermite interpolant of (g0, d0) at 0
+// and (g1, d1) at 1 (d in units of the interval), or NaN if it has none.
+double hermite_root(double g0, double d0, double g1, double d1) {
+  auto p = [&](double u) {
+    const double u2 = u * u, u3 = u2 * u;
+    return (2 * u3 - 3 * u2 + 1) * g0 + (u3 - 2 * u2 + u) * d0 + (-2 * u3 + 3 * u2) * g1 +
+           (u3 - u2) * d1;
+  };
+  constexpr int kSamples = 16;
+  double a = 0.0, pa = g0;
+  for (int i = 1; i <= kSamples; ++i) {
+    const double b = static_cast<double>(i) / kSamples;
+    const double pb = p(b);
+    if ((pa > 0) != (pb > 0)) {
+      double lo = a, hi = b, plo = pa;
+      for (int it = 0; it < 60 && hi - lo > 1e-15; ++it) {
+        const double mid = 0.5 * (lo + hi);
+        const double pm = p(mid);
+        if ((pm > 0) == (plo > 0))
+          lo = mid, plo = pm;
+        else
+          hi = mid;
+      }
+      return 0.5 * (lo + hi);
+    }
+    a = b, pa = pb;
+  }
+  return std::numeric_limits<double>::quiet_NaN();
+}
+
+}  // namespace
+
+// A state at the end of a trial over [0, tau], with the gaps and gap rates
+// of the nodes that may hit.
+struct ContactStepper::Point {
+  double tau = 0.0;
+  State state;
+  Vec gaps, rates;
+};
+
+ContactStepper::ContactStepper(const System& system, double gap_tolerance, ImpactTreatment impact)
+    : system_(system), set_(system, gap_tolerance), impact_(impact) {}
+
+ContactStepper::Point ContactStepper::point(double tau, const State& state,
+                                            const std::vector<int>& ids) const {
+  Point p;
+  p.tau = tau;
+  p.state = state;
+  p.gaps.resize(static_cast<Eigen::Index>(ids.size()));
+  p.rates.resize(static_cast<Eigen::Index>(ids.size()));
+  for (std::size_t i = 0; i < ids.size(); ++i) {
+    p.gaps[static_cast<Eigen::Index>(i)] = set_.gap(ids[i], state.q);
+    p.rates[static_cast<Eigen::Index>(i)] = set_.gap_rate(ids[i], state.q, state.v);
+  }
+  return p;
+}
+
+StepStats ContactStepper::step(SubstepScheme& scheme, State& state, double dt) {
+  State s = state;
+  const double t_end = state.t + dt;
+  StepStats total;
+  total.converged = true;
+  const int max_substeps = 4 * system_.n_unilateral() + 8;
+  for (int sub = 0; s.t < t_end - 1e-12 * dt; ++sub) {
+    if (sub > max_substeps) {
+      total.converged = false;
+      total.message =
+          "more than " + std::to_string(max_substeps) + " contact sub-steps in one step";
+      return total;
+    }
+    const StepStats r = substep(scheme, s, t_end - s.t);
+    add_up(total, r);
+    total.contact_events += r.contact_events;
+    total.contact_entries += r.contact_entries;
+    total.contact_exits += r.contact_exits;
+    if (!r.converged) {  // a failed step has no work or impulses
+      total.converged = false;
+      return total;
+    }
+    add_accepted(total, r);
+  }
+  s.t = t_end;  // sub-steps add up to dt up to round-off
+  state = std::move(s);
+  return total;
+}
+
+StepStats ContactStepper::substep(SubstepScheme& scheme, State& s, double h) {
+  StepStats total;
+  total.converged = true;
+  const std::vector<int> before = s.active;
+  set_.begin(s);
+  // Multipliers are forces: after a much shorter sub-step (an impact located
+  // just after the last) they are impulses over it, and as a start for
+  // Newton over a longer one they made it diverge.
+  if (last_h_ > 0.0 && h > 10.0 * last_h_) s.lambda.setZero();
+  auto accept = [&](State& end, const StepStats& r) {
+    last_h_ = end.t - s.t;
+    s = std::move(end);
+    add_accepted(total, r);
+    const Transitions t = transitions(before, s.active);
+    total.contact_entries = t.entries;
+    total.contact_exits = t.exits;
+    total.contact_events = t.total();
+    return total;
+  };
+
+  std::vector<int> pinned;  // closed at the start, re-entered: not released again
+  const int max_attempts = 4 * system_.n_unilateral() + 8;
+  for (int attempt = 0; attempt < max_attempts; ++attempt) {
+    State trial = s;
+    const Vec targets = set_.targets(s);
+    StepStats r = scheme.solve_substep(trial, h, targets, nullptr);
+    add_up(total, r);
+    if (!r.converged) {
+      total.converged = false;
+      return total;
+    }
+    // 1. Release active nodes whose multiplier turned tensile.
+    const std::vector<std::size_t> tensile = set_.tensile(s, trial.lambda, pinned);
+    if (!tensile.empty()) {
+      for (std::size_t k : tensile) release_candidate(s, k);
+      continue;
+    }
+    // 2. Inactive nodes penetrating at the end.
+    const std::vector<int> penetrating = set_.penetrating(s, trial.q);
+    if (penetrating.empty()) {
+      if (impact_ == ImpactTreatment::VelocityUpdate) {
+        std::vector<int> entered;  // entered open: their target was 0
+        for (std::size_t k = 0; k < s.active.size(); ++k)
+          if (targets[static_cast<Eigen::Index>(k)] == 0.0 &&
+              std::abs(set_.gap(s.active[k], s.q)) > set_.gap_tolerance())
+            entered.push_back(static_cast<int>(k));
+        if (!entered.empty()) velocity_update(scheme, s, trial, entered, r);
+      }
+      return accept(trial, r);
+    }
+    // A node closed at the start re-enters for the whole sub-step.
+    bool reentered = false;
+    for (int id : penetrating)
+      if (std::abs(set_.gap(id, s.q)) <= set_.gap_tolerance()) {
+        pinned.push_back(id);
+        activate_candidate(s, id);
+        reentered = true;
+      }
+    if (reentered) continue;
+    // Open at the start: an impact.
+    if (impact_ != ImpactTreatment::Locate) {
+      for (int id : penetrating) activate_candidate(s, id);
+      continue;
+    }
+    State located = s;
+    StepStats at_impact;
+    const Outcome o = locate(scheme, located, trial, h, pinned, total, at_impact);
+    if (o == Outcome::Failed) {
+      total.converged = false;
+      return total;
+    }
+    if (o == Outcome::Retry) {  // nodes closed at the start re-entered
+      for (int id : pinned)
+        if (!set_.is_active(s, id)) activate_candidate(s, id);
+      continue;
+    }
+    return accept(located, at_impact);
+  }
+  total.converged = false;
+  total.message = "the contact active set did not settle";
+  return total;
+}
+
+ContactStepper::Outcome ContactStepper::locate(SubstepScheme& scheme, State& s, const State& end,
+                                               double h, std::vector<int>& pinned, StepStats& total,
+                                               StepStats& accepted) {
+  const double tol = set_.gap_tolerance();
+  const std::vector<int> open = set_.open(s, s.q);
+  const Vec targets = set_.targets(s);
+  Point a = point(0.0, s, open), b = point(h, end, open);
+  // f(tau) = the least open gap at the end of a trial over [0, tau]. The
+  // first estimate is the earliest root of the cubic Hermite interpolants
+  // of each node's gap and gap rate over the bracket; after that the root is
+  // found on f's own values (a scheme's end point q(tau) of a step of length
+  // tau is not a trajectory, and its rates mislead the Hermite estimate to
+  // linear convergence): inverse quadratic interpolation through the last
+  // three values, secant, bisection as the safeguard (Brent's method).
+  double fa = set_.min_gap(open, a.state.q), fb = set_.min_gap(open, b.state.q);
+  double c_tau = std::numeric_limits<double>::quiet_NaN(), fc = 0.0;  // the previous b
+  double last_step = h, prev_step = h;
+  for (int it = 0; it < 80; ++it) {
+    const double len = b.tau - a.tau;
+    double tau = std::numeric_limits<double>::quiet_NaN();
+    if (it == 0) {
+      double u = std::numeric_limits<double>::infinity();
+      for (Eigen::Index i = 0; i < a.gaps.size(); ++i) {
+        if (!std::isfinite(a.gaps[i]) || !std::isfinite(b.gaps[i])) continue;
+        const double r = hermite_root(a.gaps[i], len * a.rates[i], b.gaps[i], len * b.rates[i]);
+        if (std::isfinite(r)) u = std::min(u, r);
+      }
+      if (std::isfinite(u)) tau = a.tau + std::clamp(u, 1e-6, 1.0 - 1e-6) * len;
+    } else if (std::isfinite(fa) && std::isfinite(fb)) {
+      if (std::isfinite(c_tau) && fc != fa && fc != fb && fa != fb) {
+        tau = a.tau * fb * fc / ((fa - fb) * (fa - fc)) +
+              b.tau * fa * fc / ((fb - fa) * (fb - fc)) + c_tau * fa * fb / ((fc - fa) * (fc - fb));
+      } else {
+        tau = b.tau - fb * (b.tau - a.tau) / (fb - fa);
+      }
+      // Brent's acceptance: inside the bracket and shrinking fast enough.
+      const double step = std::abs(tau - (std::abs(fa) < std::abs(fb) ? a.tau : b.tau));
+      if (!(tau > a.tau && tau < b.tau) || step > 0.5 * prev_step) tau = std::nan("");
+      prev_step = last_step;
+      last_step = step;
+    }
+    if (!std::isfinite(tau)) tau = 0.5 * (a.tau + b.tau), last_step = prev_step = 0.5 * len;
+    const double u = (tau - a.tau) / len;
+
+    // Warm start: the cubic Hermite interpolant of the bracket's states.
+    SolveGuess guess;
+    {
+      const double u2 = u * u, u3 = u2 * u;
+      guess.q = (2 * u3 - 3 * u2 + 1) * a.state.q + (u3 - 2 * u2 + u) * len * a.state.v +
+                (-2 * u3 + 3 * u2) * b.state.q + (u3 - u2) * len * b.state.v;
+      guess.lambda = b.state.lambda;
+    }
+    State sub = s;
+    const StepStats r = scheme.solve_substep(sub, tau, targets, &guess);
+    add_up(total, r);
+    ++counters_.location_solves;
+    counters_.location_iterations += r.iterations;
+    if (!r.converged) {
+      total.message = "impact location: " + r.message;
+      return Outcome::Failed;
+    }
+    // A node closed at the start (released in this sub-step, or touching)
+    // that penetrates at tau re-enters for the whole sub-step, which is then
+    // solved again (otherwise the next sub-step would start with it inside).
+    bool reentered = false;
+    for (int id = 0; id < system_.n_unilateral(); ++id)
+      if (!set_.is_active(s, id) && !contains(open, id) && set_.gap(id, sub.q) < -tol) {
+        pinned.push_back(id);
+        reentered = true;
+      }
+    if (reentered) return Outcome::Retry;
+
+    const double g = set_.min_gap(open, sub.q);
+    const bool collapsed = b.tau - a.tau <= 1e-14 * h;
+    if ((g >= -tol && g <= tol) || collapsed) {
+      for (int id : open)
+        if (set_.gap(id, sub.q) <= tol) activate_candidate(sub, id);
+      s = std::move(sub);
+      accepted = r;
+      ++counters_.impacts;
+      return Outcome::Accepted;
+    }
+    const Point p = point(tau, sub, open);
+    if (g < 0) {
+      c_tau = b.tau, fc = fb;
+      b = p, fb = g;
+    } else {
+      c_tau = a.tau, fc = fa;
+      a = p, fa = g;
+    }
+  }
+  total.message = "impact location did not converge";
+  return Outcome::Failed;
+}
+
+void ContactStepper::velocity_update(SubstepScheme& scheme, const State& start, State& end,
+                                     const std::vector<int>& entered, StepStats& stats) {
+  const int n = system_.n_dofs();
+  const Eigen::Index n_static = system_.n_constraints();
+  // d = sum over the entering nodes of -lambda_A grad Phi_A(q_1).
+  Vec d = Vec::Zero(n);
+  TermWorkspace ws;
+  Vec local, grad;
+  for (int k : entered) {
+    const int id = end.active[static_cast<std::size_t>(k)];
+    const Term* term = system_.unilateral_term(id);
+    if (!term) continue;
+    gather(*term, end.q, local);
+    term_gradient(*term, GradientKind::Exact, local, local, end.t, end.t, grad, nullptr, ws);
+    const double c = -end.lambda[n_static + k];
+    for (std::size_t i = 0; i < term->dofs().size(); ++i)
+      d[term->dofs()[i]] += c * grad[static_cast<Eigen::Index>(i)];
+  }
+  const Vec u = scheme.inverse_mass(d);
+  const Vec mu = system_.mass() * u;
+  const double a = u.dot(mu), b = end.v.dot(mu);
+  if (!(a > 0.0)) return;
+  const double h0 = measure(system_, start.q, start.v, start.t).total();
+  const double h1 = measure(system_, end.q, end.v, end.t).total();
+  const double deficit = h0 + stats.external_work - h1;
+  const double disc = b * b + 2.0 * a * deficit;
+  if (disc < 0.0) return;  // cannot be removed along d: keep the step as it is
+  // The root that separates (s > 0 adds velocity along the contact forces).
+  const double sc = (-b + std::sqrt(disc)) / a;
+  end.v += sc * u;
+  ++counters_.velocity_updates;
+  // What the supports gave: on prescribed rows u = 0, and the momentum
+  // change s M u differs there from the (zero-sum) s d.
+  if (!system_.prescribed().empty() && stats.external_impulse.size() > 0) {
+    const Vec extra = sc * (mu - d);
+    Vec impulse, moment;
+    resultant_and_moment(system_.dim(), end.q, extra, impulse, moment);
+    stats.external_impulse += impulse;
+    stats.external_angular_impulse += moment;
+  }
+  (void)n;
+}
+
+}  // namespace emdae
