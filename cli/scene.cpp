@@ -19,6 +19,7 @@
 #include "core/fe_element.hpp"
 #include "core/gmsh_reader.hpp"
 #include "core/mesh.hpp"
+#include "core/modified_mass.hpp"
 #include "core/particles.hpp"
 #include "integrators/contact_step.hpp"
 #include "integrators/stepper.hpp"
@@ -434,6 +435,7 @@ class Builder {
   }
   /// The mesh of a [[bodies]] entry, from its `mesh` table.
   Mesh mesh(const Fields& f, std::string* text) const;
+  Mesh generated_mesh(const Fields& m, std::string* text) const;
   Material material(const Fields& f) const;
   /// The set named by the string node `n` ("body.set") of key k.
   SetRef set_ref(const Fields& f, std::string_view k, const toml::node& n, SetKind kind) const;
@@ -746,11 +748,24 @@ std::string Builder::unique_name(const Fields& f, std::vector<std::string>& take
 
 Mesh Builder::mesh(const Fields& f, std::string* text) const {
   const Fields m = f.table("mesh", "{type = \"ring\" | \"rectangle\" | \"gmsh\", ...}", "a mesh");
+  Mesh mesh = generated_mesh(m, text);
+  // Any mesh may be turned about its area centroid (a square on its corner).
+  if (const auto degrees = m.optional_number("rotation")) {
+    if (!(std::abs(*degrees) <= 360.0))
+      m.fail_key("rotation", "must be an angle in degrees in [-360, 360], received " +
+                                 show(*m.find("rotation")));
+    rotate_mesh(mesh, *degrees * M_PI / 180.0);
+    *text += fmt::format(", turned by {} degrees", *degrees);
+  }
+  return mesh;
+}
+
+Mesh Builder::generated_mesh(const Fields& m, std::string* text) const {
   const std::string type = m.string("type", "\"ring\", \"rectangle\" or \"gmsh\"");
   // Element counts beyond this are a typo, not a mesh (and would overflow).
   constexpr long kMaxCount = 100000, kMaxElements = 10000000;
   if (type == "ring") {
-    m.only({"type", "centre", "inner_radius", "outer_radius", "around", "through"});
+    m.only({"type", "centre", "inner_radius", "outer_radius", "around", "through", "rotation"});
     const Vec c = m.vector("centre", 2, "the ring's centre, 2 numbers");
     const double r_in = m.positive("inner_radius", "the inner radius, a positive number");
     const double r_out = m.positive("outer_radius", "the outer radius, a positive number");
@@ -770,7 +785,8 @@ Mesh Builder::mesh(const Fields& f, std::string* text) const {
                      static_cast<int>(through));
   }
   if (type == "rectangle") {
-    m.only({"type", "origin", "width", "height", "nx", "ny", "grading", "grading_centre"});
+    m.only(
+        {"type", "origin", "width", "height", "nx", "ny", "grading", "grading_centre", "rotation"});
     const Vec o = m.vector("origin", 2, "the lower left corner, 2 numbers");
     const double w = m.positive("width", "the width, a positive number");
     const double h = m.positive("height", "the height, a positive number");
@@ -811,7 +827,7 @@ Mesh Builder::mesh(const Fields& f, std::string* text) const {
   if (type == "gmsh") {
     // A Gmsh MSH 4.1 file, relative to the scene file's folder; its physical
     // curves become the body's edge sets (see core/gmsh_reader.hpp).
-    m.only({"type", "file", "surface"});
+    m.only({"type", "file", "surface", "rotation"});
     const std::string file = m.string("file", "the mesh file, a path relative to the scene");
     const std::string surface = m.optional_string("surface").value_or("");
     const std::filesystem::path base = std::filesystem::path(scene_.source_path).parent_path();
@@ -987,7 +1003,7 @@ TimeSpec Builder::time_function(const Fields& f, std::string_view k) const {
 }
 
 void Builder::parse_contact(const Fields& f) {
-  f.only({"name", "slave", "master", "search_margin"});
+  f.only({"name", "slave", "master", "search_margin", "modified_mass"});
   const std::string where = f.where();
   const SetRef slave = set_ref(f, "slave", SetKind::Edges, "the slave surface, \"body.set\"");
   const SetRef master = set_ref(f, "master", SetKind::Edges, "the master surface, \"body.set\"");
@@ -1014,6 +1030,26 @@ void Builder::parse_contact(const Fields& f) {
                    static_cast<int>(s.edges.size()),
                    static_cast<int>(m.edges.size()),
                    0};
+  // The modified mass: both surfaces lose their inertia to the rest of
+  // their bodies (the massless nodes of a surface are its edges' nodes).
+  out.modified_mass = f.boolean("modified_mass", false);
+  if (out.modified_mass) {
+    for (const auto* r : {&slave, &master}) {
+      std::vector<int> surface_nodes, others;
+      const int offset = r->body->info.node_offset;
+      for (const auto& e : r->body->mesh.edge_sets.at(r->set))
+        for (int a : e) surface_nodes.push_back(a + offset);
+      std::sort(surface_nodes.begin(), surface_nodes.end());
+      for (int a = 0; a < r->body->info.n_nodes; ++a)
+        if (!std::binary_search(surface_nodes.begin(), surface_nodes.end(), a + offset))
+          others.push_back(a + offset);
+      try {
+        out.moved_mass += modify_mass(system(), surface_nodes, others).moved;
+      } catch (const std::invalid_argument& e) {
+        f.fail_key("modified_mass", std::string(e.what()) + " (surface " + r->label + ")");
+      }
+    }
+  }
   try {
     auto contact =
         std::make_unique<MortarContact>(system(), std::move(s), std::move(m), name, options);

@@ -107,6 +107,10 @@ struct SceneBody {
 struct SceneContact {
   std::string name, slave, master;  // "body.set"
   int slave_segments = 0, master_segments = 0, candidates = 0;
+  // modified_mass = true: both surfaces' nodes are massless, their mass
+  // moved within each body (core/modified_mass.hpp).
+  bool modified_mass = false;
+  double moved_mass = 0.0;
 };
 
 /// A [[dirichlet]] entry, for `emdae check`.

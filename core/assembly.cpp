@@ -14,12 +14,14 @@ void Assembler::local(const Term& term, GradientKind kind, const Vec& q0, const 
   term_gradient(term, kind, ql0_, ql1_, t0, t1, grad_, jac, ws_);
 }
 
-void Assembler::scatter_matrix(const Term& term, const Mat& k, double factor, Triplets& out) const {
+void Assembler::scatter_matrix(const Term& term, const Mat& k, double factor, Triplets& out,
+                               const std::vector<bool>* rows) const {
   const auto& dofs = term.dofs();
   const auto& fixed = s_.is_prescribed();
   for (std::size_t c = 0; c < dofs.size(); ++c)
     for (std::size_t r = 0; r < dofs.size(); ++r)
-      if (!fixed[static_cast<std::size_t>(dofs[r])])
+      if (!fixed[static_cast<std::size_t>(dofs[r])] &&
+          (!rows || (*rows)[static_cast<std::size_t>(dofs[r])]))
         out.emplace_back(dofs[r], dofs[c],
                          factor * k(static_cast<Eigen::Index>(r), static_cast<Eigen::Index>(c)));
 }
@@ -62,6 +64,17 @@ void Assembler::add_constraint_forces(GradientKind kind, const Vec& q0, const Ve
     for (std::size_t i = 0; i < dofs.size(); ++i)
       jac->emplace_back(phi_row + l, dofs[i], grad_[static_cast<Eigen::Index>(i)]);
   }
+}
+
+void Assembler::add_term(const Term& term, GradientKind kind, const Vec& q0, const Vec& q1,
+                         double t0, double t1, double factor, Vec& f, Triplets* jac,
+                         double jac_factor, const std::vector<bool>* rows) {
+  local(term, kind, q0, q1, t0, t1, jac ? &jac_ : nullptr);
+  const auto& dofs = term.dofs();
+  for (std::size_t i = 0; i < dofs.size(); ++i)
+    if (!rows || (*rows)[static_cast<std::size_t>(dofs[i])])
+      f[dofs[i]] += factor * grad_[static_cast<Eigen::Index>(i)];
+  if (jac) scatter_matrix(term, jac_, jac_factor * factor, *jac, rows);
 }
 
 void Assembler::constraint_values(const Vec& q, double t, Vec& phi) {

@@ -38,6 +38,16 @@ class Assembler {
                              const Vec& lambda, Vec& f, Vec* phi, Triplets* jac, long lambda_col,
                              long phi_row, double jac_factor = 1.0, Vec* increment = nullptr);
 
+  /// One term's gradient of `kind`, times `factor`, added to f and (with
+  /// `jac`) jac_factor * factor * its Jacobian w.r.t. q1 as triplets, both
+  /// only in the rows `rows` allows (all free rows when null; prescribed
+  /// rows never get Jacobian entries). Returns nothing else: the gradient of
+  /// the last call is in last_gradient(), in the term's local order.
+  void add_term(const Term& term, GradientKind kind, const Vec& q0, const Vec& q1, double t0,
+                double t1, double factor, Vec& f, Triplets* jac, double jac_factor,
+                const std::vector<bool>* rows);
+  const Vec& last_gradient() const { return grad_; }
+
   /// Phi(q, t), one entry per constraint.
   void constraint_values(const Vec& q, double t, Vec& phi);
 
@@ -52,7 +62,8 @@ class Assembler {
  private:
   void local(const Term& term, GradientKind kind, const Vec& q0, const Vec& q1, double t0,
              double t1, Mat* jac);
-  void scatter_matrix(const Term& term, const Mat& k, double factor, Triplets& out) const;
+  void scatter_matrix(const Term& term, const Mat& k, double factor, Triplets& out,
+                      const std::vector<bool>* rows = nullptr) const;
 
   const System& s_;
   std::vector<const Term*> constraints_;

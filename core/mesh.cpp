@@ -1,5 +1,6 @@
 #include "core/mesh.hpp"
 
+#include <Eigen/Geometry>
 #include <cmath>
 #include <memory>
 #include <sstream>
@@ -230,6 +231,12 @@ BodyInfo add_body(System& system, const Mesh& mesh, const Material& material,
     system.add_potential(std::move(elements[static_cast<std::size_t>(e)]));
   }
   return info;
+}
+
+void rotate_mesh(Mesh& mesh, double angle) {
+  const Eigen::Vector2d c = mesh.centroid();
+  const Eigen::Rotation2Dd turn(angle);
+  for (auto& x : mesh.nodes) x = c + turn * (x - c);
 }
 
 }  // namespace emdae

@@ -45,6 +45,10 @@ struct Mesh {
   void validate() const;
 };
 
+/// Turns every node of `mesh` by `angle` (radians, counter-clockwise) about
+/// its area centroid.
+void rotate_mesh(Mesh& mesh, double angle);
+
 /// Ring (annulus) about `centre`: n_around elements around, n_through across
 /// the wall, straight-sided. Node (j across, i around) at radius
 /// r_j = inner + j (outer - inner) / n_through and angle 2 pi i / n_around,

@@ -21,6 +21,7 @@ int System::add_node(const Vec& position, const Vec& velocity) {
   x0_.tail(dim_) = position;
   v0_.tail(dim_) = velocity;
   is_prescribed_.resize(static_cast<std::size_t>(n_dofs()), false);
+  is_massless_.resize(static_cast<std::size_t>(n_dofs()), false);
   assembled_ = false;
   return node;
 }
@@ -32,6 +33,37 @@ void System::set_initial_velocity(int node, const Vec& velocity) {
 void System::add_mass(int a, int b, double m) {
   node_mass_.emplace_back(a, b, m);
   if (a != b) node_mass_.emplace_back(b, a, m);
+  assembled_ = false;
+}
+
+void System::lump_mass(const std::vector<int>& nodes) {
+  std::vector<bool> in(static_cast<std::size_t>(n_nodes()), false);
+  for (int node : nodes) in[static_cast<std::size_t>(node)] = true;
+  std::vector<double> row(static_cast<std::size_t>(n_nodes()), 0.0);
+  std::vector<Eigen::Triplet<double, long>> kept;
+  kept.reserve(node_mass_.size());
+  for (const auto& e : node_mass_) {
+    if (in[static_cast<std::size_t>(e.row())] && in[static_cast<std::size_t>(e.col())])
+      row[static_cast<std::size_t>(e.row())] += e.value();
+    else
+      kept.push_back(e);
+  }
+  for (int node : nodes)
+    if (row[static_cast<std::size_t>(node)] != 0.0)
+      kept.emplace_back(node, node, row[static_cast<std::size_t>(node)]);
+  node_mass_ = std::move(kept);
+  assembled_ = false;
+}
+
+void System::add_mass_group(const std::vector<int>& nodes, const std::vector<int>& recipients) {
+  mass_groups_.push_back({nodes, recipients});
+  for (int node : nodes) {
+    if (node < 0 || node >= n_nodes())
+      throw std::invalid_argument("System::add_mass_group: no node " + std::to_string(node));
+    if (is_massless_[static_cast<std::size_t>(dof(node, 0))]) continue;
+    for (int d = 0; d < dim_; ++d) is_massless_[static_cast<std::size_t>(dof(node, d))] = true;
+    ++n_massless_;
+  }
   assembled_ = false;
 }
 
@@ -98,9 +130,14 @@ const SparseMatrix& System::mass() const {
   if (!assembled_) {
     std::vector<Eigen::Triplet<double, long>> t;
     t.reserve(node_mass_.size() * static_cast<std::size_t>(dim_));
-    for (const auto& e : node_mass_)
+    for (const auto& e : node_mass_) {
+      if (n_massless_ > 0 &&
+          (is_massless_[static_cast<std::size_t>(dof(static_cast<int>(e.row()), 0))] ||
+           is_massless_[static_cast<std::size_t>(dof(static_cast<int>(e.col()), 0))]))
+        continue;
       for (int d = 0; d < dim_; ++d)
         t.emplace_back(e.row() * dim_ + d, e.col() * dim_ + d, e.value());
+    }
     mass_.resize(n_dofs(), n_dofs());
     mass_.setFromTriplets(t.begin(), t.end());
     lumped_ = mass_ * Vec::Ones(n_dofs());
@@ -129,7 +166,7 @@ Symmetry System::symmetry() const {
 void System::validate() const {
   const Vec& m = lumped_mass();
   for (int i = 0; i < n_dofs(); ++i)
-    if (!(m[i] > 0.0))
+    if (!(m[i] > 0.0) && !is_massless_[static_cast<std::size_t>(i)])
       throw std::invalid_argument("node " + std::to_string(i / dim_) +
                                   " has no positive mass (lumped mass " + std::to_string(m[i]) +
                                   ")");

@@ -47,6 +47,27 @@ class System {
 
   /// Adds m to the node mass matrix entry M_AB (and M_BA if A != B).
   void add_mass(int a, int b, double m);
+  /// The node mass entries added so far, (A, B, m) with both (A, B) and
+  /// (B, A) listed for A != B.
+  const std::vector<Eigen::Triplet<double, long>>& node_mass_entries() const { return node_mass_; }
+  /// Replaces the mass entries among `nodes` by their row sums on the
+  /// diagonal (the lumped mass); entries coupling them to other nodes stay.
+  void lump_mass(const std::vector<int>& nodes);
+  /// Massless nodes and the nodes their mass went to (core/modified_mass.hpp):
+  /// the steppers hand a massless node's force imbalance to its group's
+  /// recipients.
+  struct MassGroup {
+    std::vector<int> massless, recipients;
+  };
+  /// Marks `massless` nodes massless, in one group with `recipients`: the
+  /// assembled mass matrix leaves out every entry in their rows and columns.
+  /// Their equations of motion are then equilibria without inertia, which
+  /// only em and midpoint integrate.
+  void add_mass_group(const std::vector<int>& massless, const std::vector<int>& recipients);
+  const std::vector<MassGroup>& mass_groups() const { return mass_groups_; }
+  /// True for every dof of a massless node.
+  const std::vector<bool>& is_massless() const { return is_massless_; }
+  bool has_massless_nodes() const { return n_massless_ > 0; }
 
   void add_potential(std::unique_ptr<Term> term);
   void add_constraint(std::unique_ptr<Term> term);
@@ -98,7 +119,8 @@ class System {
   Symmetry symmetry() const;
 
   /// Throws std::invalid_argument when the system cannot be integrated
-  /// (a node without mass, a term referring to a missing dof, ...).
+  /// (a node without mass that is not marked massless, a term referring to
+  /// a missing dof, ...).
   void validate() const;
 
  private:
@@ -109,6 +131,9 @@ class System {
   std::vector<std::unique_ptr<Term>> constraints_;
   std::vector<PrescribedDof> prescribed_;
   std::vector<bool> is_prescribed_;
+  std::vector<bool> is_massless_;
+  int n_massless_ = 0;
+  std::vector<MassGroup> mass_groups_;
   std::vector<std::unique_ptr<UnilateralConstraints>> unilateral_;
   std::vector<std::unique_ptr<Load>> loads_;
   mutable SparseMatrix mass_;

@@ -78,19 +78,31 @@ std::vector<int> ActiveSet::penetrating(const State& s, const Vec& q) const {
 
 std::vector<int> ActiveSet::open(const State& s, const Vec& q) const {
   std::vector<int> out;
-  for (int id = 0; id < system_.n_unilateral(); ++id) {
-    if (is_active(s, id)) continue;
-    const double g = gap(id, q);
-    if (g > tol_ && std::isfinite(g)) out.push_back(id);
-  }
+  for (int id = 0; id < system_.n_unilateral(); ++id)
+    if (!is_active(s, id) && gap(id, q) > tol_) out.push_back(id);
   return out;
 }
 
-Vec ActiveSet::targets(const State& s) const {
-  Vec t(static_cast<Eigen::Index>(s.active.size()));
+bool ActiveSet::algebraic(int id) const {
+  if (!system_.has_massless_nodes()) return false;
+  const Term* term = system_.unilateral_term(id);
+  if (!term) return false;
+  for (int d : term->dofs())
+    if (!system_.is_massless()[static_cast<std::size_t>(d)] &&
+        !system_.is_prescribed()[static_cast<std::size_t>(d)])
+      return false;
+  return true;
+}
+
+ActiveSet::Targets ActiveSet::targets(const State& s) const {
+  Targets t;
+  t.gap = Vec::Zero(static_cast<Eigen::Index>(s.active.size()));
+  t.closed = Vec::Zero(static_cast<Eigen::Index>(s.active.size()));
   for (std::size_t k = 0; k < s.active.size(); ++k) {
     const double g = gap(s.active[k], s.q);
-    t[static_cast<Eigen::Index>(k)] = std::abs(g) <= tol_ ? g : 0.0;
+    const bool closed = std::abs(g) <= tol_;
+    t.closed[static_cast<Eigen::Index>(k)] = closed ? 1.0 : 0.0;
+    t.gap[static_cast<Eigen::Index>(k)] = closed && !algebraic(s.active[k]) ? g : 0.0;
   }
   return t;
 }

@@ -72,12 +72,25 @@ class ActiveSet {
                                    const std::vector<int>& keep) const;
   /// Inactive, engaged candidates with Phi(q) < -tol.
   std::vector<int> penetrating(const State& s, const Vec& q) const;
-  /// Inactive, engaged candidates with Phi(q) > tol.
+  /// Inactive candidates with Phi(q) > tol, including those not engaged at q
+  /// (Phi = +infinity: nothing opposite yet, but something may come within
+  /// the step).
   std::vector<int> open(const State& s, const Vec& q) const;
 
+  /// Whether candidate `id` is algebraic: every dof of its function is
+  /// massless or prescribed (a modified-mass contact, core/modified_mass.hpp).
+  /// Its contact condition is an equilibrium at each step's end: it enters
+  /// and leaves there, with no impact to locate and no energy lost.
+  bool algebraic(int id) const;
+
   /// The targets of the active nodes for a (sub-)step starting at s (see
-  /// the header comment), in the order of s.active.
-  Vec targets(const State& s) const;
+  /// the header comment), in the order of s.active: the gap each must have
+  /// at the end, and whether it was closed at the start (1) or not (0).
+  /// Algebraic nodes' target gap is 0.
+  struct Targets {
+    Vec gap, closed;
+  };
+  Targets targets(const State& s) const;
 
   /// Minimum of Phi over `ids` at q (+infinity when empty).
   double min_gap(const std::vector<int>& ids, const Vec& q) const;

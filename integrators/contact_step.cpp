@@ -89,6 +89,21 @@ double hermite_root(double g0, double d0, double g1, double d1) {
   return std::numeric_limits<double>::quiet_NaN();
 }
 
+// Multipliers laid out for s.active from those of an earlier active set:
+// the system's own and those of nodes still active carried over, new ones 0.
+Vec carried_multipliers(const std::vector<int>& active, const Vec& lambda, const State& s) {
+  const Eigen::Index n_static = lambda.size() - static_cast<Eigen::Index>(active.size());
+  Vec out = Vec::Zero(n_static + static_cast<Eigen::Index>(s.active.size()));
+  out.head(n_static) = lambda.head(n_static);
+  for (std::size_t k = 0; k < s.active.size(); ++k) {
+    const auto it = std::find(active.begin(), active.end(), s.active[k]);
+    if (it != active.end())
+      out[n_static + static_cast<Eigen::Index>(k)] =
+          lambda[n_static + static_cast<Eigen::Index>(it - active.begin())];
+  }
+  return out;
+}
+
 }  // namespace
 
 // A state at the end of a trial over [0, tau], with the gaps and gap rates
@@ -150,10 +165,6 @@ StepStats ContactStepper::substep(SubstepScheme& scheme, State& s, double h) {
   total.converged = true;
   const std::vector<int> before = s.active;
   set_.begin(s);
-  // Multipliers are forces: after a much shorter sub-step (an impact located
-  // just after the last) they are impulses over it, and as a start for
-  // Newton over a longer one they made it diverge.
-  if (last_h_ > 0.0 && h > 10.0 * last_h_) s.lambda.setZero();
   auto accept = [&](State& end, const StepStats& r) {
     last_h_ = end.t - s.t;
     s = std::move(end);
@@ -167,15 +178,36 @@ StepStats ContactStepper::substep(SubstepScheme& scheme, State& s, double h) {
 
   std::vector<int> pinned;  // closed at the start, re-entered: not released again
   const int max_attempts = 4 * system_.n_unilateral() + 8;
+  bool have_guess = false;
+  SolveGuess guess;  // the last trial's end, for the next solve of this sub-step
+  std::vector<int> guess_state_active;
+  Vec guess_lambda;
+  // Multipliers are forces: after a much shorter sub-step (an impact located
+  // just after the last) they are impulses over it, and as a start for
+  // Newton over a longer one they made it diverge. Start from zero then.
+  if (last_h_ > 0.0 && h > 10.0 * last_h_) {
+    guess.q = s.q + h * s.v;
+    guess_state_active = s.active;
+    guess_lambda = Vec::Zero(s.lambda.size());
+    have_guess = true;
+  }
   for (int attempt = 0; attempt < max_attempts; ++attempt) {
     State trial = s;
-    const Vec targets = set_.targets(s);
-    StepStats r = scheme.solve_substep(trial, h, targets, nullptr);
+    const ActiveSet::Targets targets = set_.targets(s);
+    if (have_guess) guess.lambda = carried_multipliers(guess_state_active, guess_lambda, s);
+    StepStats r = scheme.solve_substep(trial, h, targets.gap, have_guess ? &guess : nullptr);
     add_up(total, r);
     if (!r.converged) {
       total.converged = false;
       return total;
     }
+    // A re-solve with a changed active set starts from this trial's end:
+    // positions, and the multipliers of the nodes that stay active (one or
+    // two Newton iterations instead of three or four from the predictor).
+    guess.q = trial.q;
+    guess_state_active = s.active;
+    guess_lambda = trial.lambda;
+    have_guess = true;
     // 1. Release active nodes whose multiplier turned tensile.
     const std::vector<std::size_t> tensile = set_.tensile(s, trial.lambda, pinned);
     if (!tensile.empty()) {
@@ -188,8 +220,7 @@ StepStats ContactStepper::substep(SubstepScheme& scheme, State& s, double h) {
       if (impact_ == ImpactTreatment::VelocityUpdate) {
         std::vector<int> entered;  // entered open: their target was 0
         for (std::size_t k = 0; k < s.active.size(); ++k)
-          if (targets[static_cast<Eigen::Index>(k)] == 0.0 &&
-              std::abs(set_.gap(s.active[k], s.q)) > set_.gap_tolerance())
+          if (targets.closed[static_cast<Eigen::Index>(k)] == 0.0 && !set_.algebraic(s.active[k]))
             entered.push_back(static_cast<int>(k));
         if (!entered.empty()) velocity_update(scheme, s, trial, entered, r);
       }
@@ -233,7 +264,7 @@ ContactStepper::Outcome ContactStepper::locate(SubstepScheme& scheme, State& s, 
                                                StepStats& accepted) {
   const double tol = set_.gap_tolerance();
   const std::vector<int> open = set_.open(s, s.q);
-  const Vec targets = set_.targets(s);
+  const ActiveSet::Targets targets = set_.targets(s);
   Point a = point(0.0, s, open), b = point(h, end, open);
   // f(tau) = the least open gap at the end of a trial over [0, tau]. The
   // first estimate is the earliest root of the cubic Hermite interpolants
@@ -281,7 +312,7 @@ ContactStepper::Outcome ContactStepper::locate(SubstepScheme& scheme, State& s, 
       guess.lambda = b.state.lambda;
     }
     State sub = s;
-    const StepStats r = scheme.solve_substep(sub, tau, targets, &guess);
+    const StepStats r = scheme.solve_substep(sub, tau, targets.gap, &guess);
     add_up(total, r);
     ++counters_.location_solves;
     counters_.location_iterations += r.iterations;

@@ -315,6 +315,10 @@ GeneralizedAlphaStepper::GeneralizedAlphaStepper(const System& system,
       gap_tol_(settings.gap_tolerance > 0 ? settings.gap_tolerance : 10 * newton.tolerance) {
   p_.validate();
   system_.validate();
+  if (system_.has_massless_nodes())
+    throw std::invalid_argument(
+        "generalized-alpha needs mass at every node; a modified mass (massless contact nodes) is "
+        "integrated by em and midpoint");
 }
 
 bool GeneralizedAlphaStepper::continues(const State& state) const {

@@ -760,6 +760,10 @@ struct IdaStepper::Impl {
 IdaStepper::IdaStepper(const System& system, IdaSettings settings)
     : impl_(std::make_unique<Impl>(system, settings)) {
   system.validate();
+  if (system.has_massless_nodes())
+    throw std::invalid_argument(
+        "IDA needs mass at every node; a modified mass (massless contact nodes) is integrated by "
+        "em and midpoint");
   if (!(settings.rtol > 0) || !(settings.atol > 0))
     throw std::invalid_argument("IdaStepper: tolerances must be positive, received rtol = " +
                                 std::to_string(settings.rtol) +

@@ -65,10 +65,8 @@ class MidpointFamilyStepper : public Stepper, public SubstepScheme {
   Vec inverse_mass(const Vec& f) const override;
 
  private:
-  class Problem;
-  void velocity_from_momentum_balance(const State& start, const Vec& q1, const Vec& lambda,
-                                      const std::vector<const Term*>& extra, double dt, Vec& v1,
-                                      double& work);
+  void velocity_from_momentum_balance(const State& start, const Vec& q1, const Vec& force,
+                                      const Vec& load, double dt, Vec& v1, double& work);
   std::vector<const Term*> active_terms(const std::vector<int>& active) const;
 
   const System& system_;
@@ -79,7 +77,8 @@ class MidpointFamilyStepper : public Stepper, public SubstepScheme {
   Vec stiffness_diag_;       // |K_ii| at the initial configuration, if scaling by it
   Vec full_stiffness_diag_;  // |K_ii| at the initial configuration
   Vec external_impulse_, external_angular_impulse_;  // of the last solve
-  std::vector<int> free_;                            // free dofs in order
+  std::vector<int> free_;                            // free dofs with mass, in order
+  std::vector<int> massless_;                        // free dofs without mass
   SparseMatrix m_fp_;                                // M restricted to free rows, all columns
   Eigen::SimplicialLDLT<SparseMatrix> m_ff_;         // factor of M on the free dofs
 };
