@@ -61,6 +61,7 @@
 #include "core/mesh.hpp"
 #include "core/quantities.hpp"
 #include "integrators/driver.hpp"
+#include "integrators/schemes.hpp"
 #include "integrators/stepper.hpp"
 #include "particle_systems.hpp"
 #include "pendulum.hpp"
@@ -101,11 +102,10 @@ double max_nodal_distance(const Vec& a, const Vec& b) {
 
 RunResult run(const System& s, const RunSpec& spec, double t_end, double energy_scale,
               const Vec* q_ref) {
-  SchemeSettings ss;
-  ss.rtol = ss.atol = spec.tol;
-  ss.rho_inf = 0.9;
-  NewtonSettings ns;  // tolerance 1e-10 (length), 20 iterations
-  auto stepper = make_stepper(spec.scheme, s, ns, ss);
+  SchemeSettings ss;  // Newton tolerance 1e-10 (length), 20 iterations
+  ss.ida.rtol = ss.ida.atol = spec.tol;
+  ss.galpha = GeneralizedAlphaSettings::chung_hulbert(0.9);
+  auto stepper = make_stepper(spec.scheme, s, ss);
   State st = initial_state(s);
   const double h0 = measure(s, st.q, st.v, 0.0).total();
   RunResult r;
@@ -316,10 +316,10 @@ ImpactRun impact_run(const std::string& scheme, bool locate, const std::string& 
                      const std::string& out_dir, double dt = 0.01, double ida_tol = 1e-8) {
   const test_systems::RingImpact scene = test_systems::ring_impact(120, 10, 20, 64, 1, 47, 50);
   const System& s = *scene.system;
-  SchemeSettings settings;
-  settings.locate_impacts = locate;
-  settings.rtol = settings.atol = ida_tol;
-  auto stepper = make_stepper(scheme, s, NewtonSettings{1e-11, 25, false}, settings);
+  SchemeSettings settings{NewtonSettings{1e-11, 25, false}};
+  settings.contact.locate_impacts = locate;
+  settings.ida.rtol = settings.ida.atol = ida_tol;
+  auto stepper = make_stepper(scheme, s, settings);
   State st = initial_state(s);
   const Quantities q0 = measure(s, st.q, st.v, 0);
   ImpactRun f;

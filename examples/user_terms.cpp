@@ -27,6 +27,7 @@
 #include <cmath>
 #include <cstdio>
 
+#include "integrators/schemes.hpp"
 #include "core/particles.hpp"
 #include "core/quantities.hpp"
 #include "core/user_term.hpp"
@@ -52,7 +53,7 @@ struct Figures {
 };
 
 Figures run(const System& s, const char* scheme, double dt, double t_end) {
-  auto stepper = make_stepper(scheme, s, NewtonSettings{1e-12, 20, false});
+  auto stepper = make_stepper(scheme, s, {NewtonSettings{1e-12, 20, false}});
   State st = initial_state(s);
   const double e0 = measure(s, st.q, st.v, 0.0).total();
   Figures f{e0, e0, 0.0, 0.0, true};

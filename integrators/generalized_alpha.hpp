@@ -134,6 +134,9 @@ struct GeneralizedAlphaSettings {
   // at t_n, and the penetration above which it enters at t_{n+1} (0: 10
   // times the Newton tolerance).
   double gap_tolerance = 0.0;
+  // The spectral radius at infinity the parameters were chosen for
+  // (chung_hulbert, hht), for reports; NaN for newmark.
+  double rho_inf = 1.0;
 
   /// Chung & Hulbert's optimal parameters for rho_inf in [0, 1].
   static GeneralizedAlphaSettings chung_hulbert(double rho_inf);

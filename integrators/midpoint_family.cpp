@@ -117,7 +117,7 @@ class MidpointFamilyStepper::Problem final : public NewtonProblem {
 };
 
 MidpointFamilyStepper::MidpointFamilyStepper(const System& system, GradientKind kind,
-                                             NewtonSettings newton, SchemeSettings scheme)
+                                             NewtonSettings newton, MidpointFamilySettings scheme)
     : system_(system),
       kind_(kind),
       newton_(newton),

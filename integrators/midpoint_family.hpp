@@ -59,7 +59,7 @@ namespace emdae {
 class MidpointFamilyStepper : public Stepper {
  public:
   MidpointFamilyStepper(const System& system, GradientKind kind, NewtonSettings newton,
-                        SchemeSettings scheme);
+                        MidpointFamilySettings scheme);
   StepStats step(State& state, double dt) override;
 
   KluSolver::Counters klu_counters() const { return newton_.klu_counters(); }
@@ -83,7 +83,7 @@ class MidpointFamilyStepper : public Stepper {
   const System& system_;
   GradientKind kind_;
   NewtonSolver newton_;
-  SchemeSettings scheme_;
+  MidpointFamilySettings scheme_;
   double gap_tol_;
   Vec stiffness_diag_;       // |K_ii| at the initial configuration, if scaling by it
   Vec full_stiffness_diag_;  // |K_ii| at the initial configuration

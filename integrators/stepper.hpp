@@ -61,33 +61,25 @@ class Stepper {
   virtual StepStats step(State& state, double dt) = 0;
 };
 
-/// Names accepted by make_stepper, in the order shown to users.
-std::vector<std::string> known_schemes();
-
-/// Settings of the schemes that have their own: IDA's local error tolerances
-/// (on q and v), generalized-alpha's spectral radius at infinity.
-struct SchemeSettings {
-  double rtol = 1e-8, atol = 1e-8;  // "ida"
-  int max_order = 5;                // "ida": highest BDF order, 1..5
-  double rho_inf = 1.0;             // "galpha", in [0, 1]
-  // Contact ("em", "midpoint"): locate each impact and end a sub-step there
-  // so that a node enters contact with a closed gap (energy treatment), and
-  // the gap below which an inactive candidate counts as touching (0: the
-  // Newton tolerance for "em"/"midpoint", 10 times it for "galpha", 10 atol
-  // for "ida"). A node enters with a gap up to this, which costs lambda
-  // times it in energy: 1e-10 rather than 1e-9 took the paper's ring impact
-  // from 5e-9 to 3e-10.
+/// How a stepper meets contact (the impact treatment), shared by em,
+/// midpoint and galpha; ida uses the gap tolerance.
+struct ContactSettings {
+  // Locate each impact and end a sub-step there so that a node enters
+  // contact with a closed gap (energy treatment; em and midpoint).
   bool locate_impacts = true;
+  // The gap below which an inactive candidate counts as touching (0: the
+  // Newton tolerance for em and midpoint, 10 times it for galpha, 10 atol
+  // for ida). A node enters with a gap up to this, which costs lambda times
+  // it in energy: 1e-10 rather than 1e-9 took the paper's ring impact from
+  // 5e-9 to 3e-10.
   double gap_tolerance = 0.0;
+};
+
+/// Settings of the midpoint family: em and midpoint (and the static solve).
+struct MidpointFamilySettings : ContactSettings {
   // Scale residuals by the Newton matrix's diagonal (statics) instead of the
   // inertial dt^2 / (2 m_i) (dynamics); see midpoint_family.hpp.
   bool stiffness_scaled_residual = false;
 };
-
-/// Builds the stepper called `name` for `system`; throws std::invalid_argument
-/// naming the known schemes when `name` is not one of them.
-std::unique_ptr<Stepper> make_stepper(const std::string& name, const System& system,
-                                      const NewtonSettings& newton,
-                                      const SchemeSettings& scheme = {});
 
 }  // namespace emdae

@@ -16,6 +16,7 @@
 #include <cmath>
 #include <vector>
 
+#include "integrators/schemes.hpp"
 #include "contact_systems.hpp"
 #include "core/quantities.hpp"
 #include "integrators/driver.hpp"
@@ -60,7 +61,7 @@ BearingFigures run_bearing(const Bearing& b, const std::vector<std::vector<int>>
     EXPECT_LE(st.lambda[s.n_constraints() + static_cast<Eigen::Index>(k)], 0.0);  // compressive
   }
 
-  auto stepper = make_stepper("em", s, NewtonSettings{1e-10, 25, false});
+  auto stepper = make_stepper("em", s, {NewtonSettings{1e-10, 25, false}});
   const Quantities q0 = measure(s, st.q, st.v, 0.0);
   double work = 0.0, ang_impulse = 0.0;
   const double impulse = TimeFunction::hat(0.0, 0.5, b.torque_peak).integral(0.0, 0.5);

@@ -289,7 +289,7 @@ TEST(Verify, HistoryColumns) {
 
 TEST(Verify, RecorderMeasuresAndExplains) {
   const auto scene = load_scene(example("double_pendulum"));
-  const System& s = *scene->system;
+  const System& s = scene->system();
   State state = initial_state(s);
   Recorder rec(s, state);
   EXPECT_FALSE(rec.linear_momentum_error_max().has_value());
@@ -325,7 +325,7 @@ TEST(Verify, RecorderMeasuresAndExplains) {
 TEST(Verify, SummaryIsWrittenAtomicallyWithNulls) {
   TempDir dir;
   const auto scene = load_scene(example("elastic_pendulum"));
-  const System& s = *scene->system;
+  const System& s = scene->system();
   Recorder rec(s, initial_state(s));
   RunInfo info;
   info.scene = "x";

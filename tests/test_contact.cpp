@@ -12,6 +12,7 @@
 #include <cmath>
 #include <random>
 
+#include "integrators/schemes.hpp"
 #include "contact/jet.hpp"
 #include "contact/mortar.hpp"
 #include "contact_systems.hpp"
@@ -127,9 +128,9 @@ struct ImpactFigures {
 ImpactFigures run_impact(const RingImpact& scene, const char* scheme, double dt, double t_end,
                          bool locate) {
   const System& s = *scene.system;
-  SchemeSettings settings;
-  settings.locate_impacts = locate;
-  auto stepper = make_stepper(scheme, s, NewtonSettings{1e-11, 25, false}, settings);
+  SchemeSettings settings{NewtonSettings{1e-11, 25, false}};
+  settings.contact.locate_impacts = locate;
+  auto stepper = make_stepper(scheme, s, settings);
   State st = initial_state(s);
   const Quantities q0 = measure(s, st.q, st.v, 0);
   ImpactFigures f;

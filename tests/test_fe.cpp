@@ -28,6 +28,7 @@
 #include "core/mesh.hpp"
 #include "core/quantities.hpp"
 #include "integrators/energy_momentum.hpp"
+#include "integrators/schemes.hpp"
 #include "integrators/stepper.hpp"
 
 namespace emdae {
@@ -557,7 +558,7 @@ std::unique_ptr<System> spinning_ring(MaterialModel model, int n_around, double 
 
 FlightFigures fly(const System& s, const std::string& scheme, double dt, long n_steps,
                   double tolerance = 1e-11) {
-  auto stepper = make_stepper(scheme, s, NewtonSettings{tolerance, 25, false});
+  auto stepper = make_stepper(scheme, s, {NewtonSettings{tolerance, 25, false}});
   State st = initial_state(s);
   const Quantities q0 = measure(s, st.q, st.v, st.t);
   FlightFigures r;

@@ -61,6 +61,7 @@
 #include "core/user_term.hpp"
 #include "integrators/driver.hpp"
 #include "integrators/generalized_alpha.hpp"
+#include "integrators/schemes.hpp"
 #include "integrators/stepper.hpp"
 #include "pendulum.hpp"
 
@@ -460,13 +461,13 @@ TEST(GeneralizedAlphaOscillator, DissipationMatchesTheSpectralRadius) {
       "  rho_inf  Omega  steps  rho theory      rho measured    (meas - theory)/(1 - theory)  "
       "(E_0 - E_N)/E_0\n");
   for (double rho : {0.5, 0.8, 1.0}) {
-    SchemeSettings scheme;
-    scheme.rho_inf = rho;
+    SchemeSettings scheme{NewtonSettings{1e-13, 20, false}};
+    scheme.galpha = GeneralizedAlphaSettings::chung_hulbert(rho);
     for (double big_omega : {0.3, 1.0, 3.0}) {
       const SpectralRadii theory =
           spectral_radii(GeneralizedAlphaSettings::chung_hulbert(rho), big_omega);
       ASSERT_GT(theory.principal, 0.0) << "principal roots complex (below bifurcation)";
-      auto stepper = make_stepper("galpha", *s, NewtonSettings{1e-13, 20, false}, scheme);
+      auto stepper = make_stepper("galpha", *s, scheme);
       State st = initial_state(*s);
       const double e0 = energy(st);
       std::vector<double> log_e = {0.0};  // log(E_n / E_0)

@@ -11,6 +11,7 @@
 
 #include <cmath>
 
+#include "integrators/schemes.hpp"
 #include "core/quantities.hpp"
 #include "integrators/driver.hpp"
 #include "particle_systems.hpp"
@@ -28,7 +29,7 @@ struct RunFigures {
 };
 
 RunFigures run(const System& s, const std::string& scheme, double dt, double t_end, double tol) {
-  auto stepper = make_stepper(scheme, s, NewtonSettings{tol, 25, false});
+  auto stepper = make_stepper(scheme, s, {NewtonSettings{tol, 25, false}});
   State st = initial_state(s);
   const Quantities q0 = measure(s, st.q, st.v, st.t);
   RunFigures r;
@@ -200,7 +201,7 @@ TEST(Driver, CutsBackOnNewtonFailureAndReportsIt) {
   // records the cut-backs; with min_dt too large it stops with a message
   // naming the time, the step and the residual.
   auto s = elastic_pendulum(9.81e6);
-  auto stepper = make_stepper("em", *s, NewtonSettings{1e-11, 2, false});
+  auto stepper = make_stepper("em", *s, {NewtonSettings{1e-11, 2, false}});
   State st = initial_state(*s);
   const RunOutcome out = integrate(*stepper, st, TimeSettings{0.05, 0.1, 0.05 / 4},
                                    [](const State&, const AcceptedStep&) {});
@@ -212,7 +213,7 @@ TEST(Driver, CutsBackOnNewtonFailureAndReportsIt) {
 
   // With a floor low enough, the run completes with smaller steps.
   State st2 = initial_state(*s);
-  auto stepper2 = make_stepper("em", *s, NewtonSettings{1e-11, 4, false});
+  auto stepper2 = make_stepper("em", *s, {NewtonSettings{1e-11, 4, false}});
   long accepted = 0;
   const RunOutcome ok = integrate(*stepper2, st2, TimeSettings{0.05, 0.1, 1e-6},
                                   [&](const State&, const AcceptedStep&) { ++accepted; });

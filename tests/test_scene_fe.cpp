@@ -17,6 +17,7 @@
 #include <string>
 #include <vector>
 
+#include "integrators/schemes.hpp"
 #include "cli/scene.hpp"
 #include "contact_systems.hpp"
 #include "core/quantities.hpp"
@@ -233,7 +234,7 @@ std::vector<Malformed> malformed_fe_scenes() {
        kValid + "[[dirichlet]]\nnodes = \"b.outer\"\nfixed = true\n\n" +
            "[[anchors]]\nnodes = \"b.outer\"  # clamped already\npoint = [10.5, 0.0]\n",
        "# clamped",
-       {"key 'anchors[0].nodes'", "prescribed by [[dirichlet]]"}},
+       {"key 'anchors[0].nodes'", "prescribed by a Dirichlet set ([[dirichlet]])"}},
       {"anchor_twice",
        kValid + "[[anchors]]\nnodes = \"b.outer\"\npoint = [10.5, 0.0]\n\n" +
            "[[anchors]]\nnodes = \"b.outer\"  # again\npoint = [0.0, 0.0]\n",
@@ -355,21 +356,21 @@ TEST(SceneFe, SchemeFromTheCommandLineIsNamedAsTheCulprit) {
 TEST(SceneFe, SmallScenesBuildBodiesContactAndNames) {
   TempDir dir;
   const auto scene = load_scene(dir.write("ok.toml", kValid));
-  ASSERT_EQ(scene->bodies.size(), 2u);
-  EXPECT_EQ(scene->bodies[0].name, "a");
-  EXPECT_EQ(scene->bodies[0].n_nodes, 32);
-  EXPECT_EQ(scene->bodies[0].n_elements, 16);
-  EXPECT_EQ(scene->bodies[1].node_offset, 32);
-  EXPECT_EQ(scene->system->n_nodes(), 64);
-  EXPECT_EQ(scene->system->potentials().size(), 32u);
-  ASSERT_EQ(scene->contacts.size(), 1u);
-  EXPECT_EQ(scene->contacts[0].name, "a.outer/b.outer");
-  EXPECT_EQ(scene->contacts[0].slave_segments, 16);
-  EXPECT_EQ(scene->system->n_unilateral(), 16);
+  ASSERT_EQ(scene->model->bodies().size(), 2u);
+  EXPECT_EQ(scene->model->bodies()[0].name, "a");
+  EXPECT_EQ(scene->model->bodies()[0].info.n_nodes, 32);
+  EXPECT_EQ(scene->model->bodies()[0].info.n_elements, 16);
+  EXPECT_EQ(scene->model->bodies()[1].info.node_offset, 32);
+  EXPECT_EQ(scene->system().n_nodes(), 64);
+  EXPECT_EQ(scene->system().potentials().size(), 32u);
+  ASSERT_EQ(scene->model->contacts().size(), 1u);
+  EXPECT_EQ(scene->model->contacts()[0].name, "a.outer/b.outer");
+  EXPECT_EQ(scene->model->contacts()[0].slave_segments, 16);
+  EXPECT_EQ(scene->system().n_unilateral(), 16);
   EXPECT_TRUE(scene->warnings.empty());
   // Body mass = rho times the (polygonal) ring area.
   const double area = 0.5 * 16 * std::sin(2 * std::acos(-1.0) / 16) * (100.0 - 64.0);
-  EXPECT_NEAR(scene->bodies[0].mass, 0.001 * area, 1e-12);
+  EXPECT_NEAR(scene->model->bodies()[0].mass(), 0.001 * area, 1e-12);
 }
 
 TEST(SceneFe, BodyForceAndTractionAreConsistentNodalLoads) {
@@ -385,10 +386,10 @@ TEST(SceneFe, BodyForceAndTractionAreConsistentNodalLoads) {
       "[[loads]]\nname = \"push\"\ntype = \"traction\"\non = \"plate.right\"\n"
       "traction = [-4.0, 1.0]\n";
   const auto scene = load_scene(dir.write("plate.toml", plate));
-  const System& s = *scene->system;
+  const System& s = scene->system();
   ASSERT_EQ(s.loads().size(), 2u);
-  ASSERT_EQ(scene->loads.size(), 2u);
-  EXPECT_EQ(scene->loads[1].name, "push");
+  ASSERT_EQ(scene->model->loads().size(), 2u);
+  EXPECT_EQ(scene->model->loads()[1].name, "push");
   // At t = 0.5 the ramp is at 1: body force m b with m = rho w h = 6, plus
   // the traction times the right edge's length 1.
   Vec f = Vec::Zero(s.n_dofs());
@@ -401,7 +402,7 @@ TEST(SceneFe, BodyForceAndTractionAreConsistentNodalLoads) {
   // quarter of an element's mass, an interior node four quarters.
   const double element_mass = 3.0 * 0.5 * 0.5;
   EXPECT_NEAR(f[1] - 0.0, element_mass / 4 * -2.0, 1e-12);  // node 0, no traction there
-  EXPECT_FALSE(scene->loads_vanish(0.0, 0.1));
+  EXPECT_FALSE(scene->model->loads_vanish(0.0, 0.1));
 }
 
 TEST(SceneFe, DirichletFixesAndDrivesNodes) {
@@ -417,13 +418,13 @@ TEST(SceneFe, DirichletFixesAndDrivesNodes) {
       "[[dirichlet]]\nnodes = \"plate.right\"\ndisplacement = [0.2, 0.0]\ncomponents = \"x\"\n"
       "time_function = { type = \"ramp\", start = 0.0, end = 2.0 }\n";
   const auto scene = load_scene(dir.write("plate.toml", plate));
-  const System& s = *scene->system;
+  const System& s = scene->system();
   // left: 3 nodes x 2; bottom: 3 nodes y, one of them already fixed (the
   // shared corner); right: 3 nodes x.
   EXPECT_EQ(s.prescribed().size(), 6u + 2u + 3u);
-  ASSERT_EQ(scene->dirichlet.size(), 3u);
-  EXPECT_EQ(scene->dirichlet[0].n_dofs, 6);
-  EXPECT_EQ(scene->dirichlet[1].n_dofs, 2);
+  ASSERT_EQ(scene->model->dirichlet().size(), 3u);
+  EXPECT_EQ(scene->model->dirichlet()[0].n_dofs, 6);
+  EXPECT_EQ(scene->model->dirichlet()[1].n_dofs, 2);
   const int corner = 2;  // node (nx, 0): right end of the bottom edge
   for (const auto& p : s.prescribed()) {
     if (p.dof != 2 * corner) continue;
@@ -446,7 +447,7 @@ TEST(SceneFe, GravityWeighsFreeBodyNodes) {
       "material = { young = 10.0, poisson = 0.3, density = 1.5 }\n"
       "[[dirichlet]]\nnodes = \"plate.left\"\nfixed = true\n";
   const auto scene = load_scene(dir.write("plate.toml", plate));
-  const System& s = *scene->system;
+  const System& s = scene->system();
   // 6 nodes, 2 fixed: 2 elements + 4 dead loads. V = -sum m_A g y_A = 0 at y = 0 rows.
   EXPECT_EQ(s.potentials().size(), 2u + 4u);
   Vec q = s.initial_positions();
@@ -460,12 +461,12 @@ TEST(SceneFe, GravityWeighsFreeBodyNodes) {
 TEST(SceneFe, LoadFreeIntervalsFollowTheTimeFunctions) {
   TempDir dir;
   const auto scene = load_scene(dir.write("t.toml", kValid + kTorque));
-  EXPECT_FALSE(scene->loads_vanish(0.0, 0.01));
-  EXPECT_FALSE(scene->loads_vanish(0.04, 0.05));
-  EXPECT_TRUE(scene->loads_vanish(0.05, 0.06));
-  EXPECT_TRUE(scene->loads_vanish(-1.0, 0.0));
+  EXPECT_FALSE(scene->model->loads_vanish(0.0, 0.01));
+  EXPECT_FALSE(scene->model->loads_vanish(0.04, 0.05));
+  EXPECT_TRUE(scene->model->loads_vanish(0.05, 0.06));
+  EXPECT_TRUE(scene->model->loads_vanish(-1.0, 0.0));
   const auto without = load_scene(dir.write("u.toml", kValid));
-  EXPECT_TRUE(without->loads_vanish(0.0, 1.0));
+  EXPECT_TRUE(without->model->loads_vanish(0.0, 1.0));
 }
 
 // The recorder on a loaded run: energy error over the load-free part only,
@@ -473,13 +474,13 @@ TEST(SceneFe, LoadFreeIntervalsFollowTheTimeFunctions) {
 TEST(SceneFe, RecorderSplitsLoadedAndLoadFreeIntervals) {
   TempDir dir;
   const auto scene = load_scene(dir.write("t.toml", kTime + kRings + kTorque));
-  const System& s = *scene->system;
-  auto stepper = make_stepper("em", s, scene->newton, scene->scheme_settings);
+  const System& s = scene->system();
+  auto stepper = make_stepper("em", s, scene->settings.schemes);
   State st = initial_state(s);
   Recorder rec(s, st);
-  rec.set_load_free_test([&](double a, double b) { return scene->loads_vanish(a, b); });
+  rec.set_load_free_test([&](double a, double b) { return scene->model->loads_vanish(a, b); });
   const RunOutcome out = integrate(
-      *stepper, st, scene->time, [&](const State& x, const AcceptedStep& a) { rec.observe(x, a); });
+      *stepper, st, scene->settings.time, [&](const State& x, const AcceptedStep& a) { rec.observe(x, a); });
   ASSERT_TRUE(out.ok) << out.message;
   EXPECT_TRUE(rec.has_external_work());
   EXPECT_GT(rec.last().external_work, 0.0);
@@ -525,40 +526,40 @@ TEST(ExamplesFe, PlateWithHoleImportsItsGmshMesh) {
   // The body comes from examples/meshes/plate_with_hole.msh (gmsh wrote it):
   // 166 quadrilaterals; the physical curves are the sets the scene uses.
   const auto scene = load_scene(example("plate_with_hole"));
-  ASSERT_EQ(scene->bodies.size(), 1u);
-  EXPECT_EQ(scene->bodies[0].geometry.n_elements(), 166);
-  EXPECT_EQ(scene->system->n_dofs(), 2 * scene->bodies[0].geometry.n_nodes());
-  EXPECT_FALSE(scene->system->prescribed().empty());  // "plate.left" clamped
-  EXPECT_EQ(scene->system->loads().size(), 1u);       // traction on "plate.right"
+  ASSERT_EQ(scene->model->bodies().size(), 1u);
+  EXPECT_EQ(scene->model->bodies()[0].mesh.n_elements(), 166);
+  EXPECT_EQ(scene->system().n_dofs(), 2 * scene->model->bodies()[0].mesh.n_nodes());
+  EXPECT_FALSE(scene->system().prescribed().empty());  // "plate.left" clamped
+  EXPECT_EQ(scene->system().loads().size(), 1u);       // traction on "plate.right"
 }
 
 TEST(ExamplesFe, RingImpactIsThePapersImpact) {
   const auto scene = load_scene(example("ring_impact"));
-  EXPECT_EQ(scene->name, "ring_impact");
-  EXPECT_EQ(scene->scheme, "em");
-  EXPECT_DOUBLE_EQ(scene->time.dt, 0.01);
-  EXPECT_DOUBLE_EQ(scene->time.t_end, 20.0);
+  EXPECT_EQ(scene->settings.name, "ring_impact");
+  EXPECT_EQ(scene->settings.scheme, "em");
+  EXPECT_DOUBLE_EQ(scene->settings.time.dt, 0.01);
+  EXPECT_DOUBLE_EQ(scene->settings.time.t_end, 20.0);
   EXPECT_TRUE(scene->warnings.empty());
   // Outer surfaces 120 apart along x, right ring 20 higher, speeds 10 each.
   const auto api = test_systems::ring_impact(120.0, 10.0, 20.0, 64, 1, 47.0, 50.0);
-  expect_same_system(*scene->system, *api.system);
-  const State st = initial_state(*scene->system);
-  const Quantities q = measure(*scene->system, st.q, st.v, 0.0);
+  expect_same_system(scene->system(), *api.system);
+  const State st = initial_state(scene->system());
+  const Quantities q = measure(scene->system(), st.q, st.v, 0.0);
   EXPECT_GT(std::abs(q.angular_momentum[0]), 100.0);  // off-centre
-  EXPECT_TRUE(scene->tolerances.energy_rel.has_value());
+  EXPECT_TRUE(scene->settings.tolerances.energy_rel.has_value());
 }
 
 TEST(ExamplesFe, BearingIsThePapersBearing) {
   const auto scene = load_scene(example("bearing"));
   const auto api = test_systems::bearing();
-  expect_same_system(*scene->system, *api.system);
-  ASSERT_TRUE(scene->statics.enabled);
-  ASSERT_EQ(scene->statics.hold_rotation.size(), 1u);
-  EXPECT_EQ(scene->statics.hold_rotation[0], api.inner_surface);
-  EXPECT_EQ(scene->statics.hold_names[0], "inner_ring.inner");
-  ASSERT_EQ(scene->loads.size(), 1u);
-  EXPECT_TRUE(scene->loads_vanish(0.5, 2.0));
-  EXPECT_FALSE(scene->loads_vanish(0.0, 0.5));
+  expect_same_system(scene->system(), *api.system);
+  ASSERT_TRUE(scene->settings.statics.enabled);
+  ASSERT_EQ(scene->settings.statics.hold_rotation.size(), 1u);
+  EXPECT_EQ(scene->model->nodes(scene->settings.statics.hold_rotation[0]), api.inner_surface);
+  EXPECT_EQ(scene->settings.statics.hold_rotation[0], "inner_ring.inner");
+  ASSERT_EQ(scene->model->loads().size(), 1u);
+  EXPECT_TRUE(scene->model->loads_vanish(0.5, 2.0));
+  EXPECT_FALSE(scene->model->loads_vanish(0.0, 0.5));
 }
 
 // Every scene in examples/ loads cleanly: no errors, no warnings.
@@ -582,16 +583,16 @@ TEST(ExamplesFe, HertzIsTheTestsMediumMesh) {
   // the block tests/test_hertz.cpp maps by hand.
   const auto scene = load_scene(example("hertz"));
   const auto api = test_systems::hertz_contact(400, 16, 80, 40);
-  expect_same_system(*scene->system, *api.system);
-  EXPECT_TRUE(scene->static_only);
-  EXPECT_EQ(scene->statics.settings.increments, 4);
-  EXPECT_EQ(scene->statics.settings.load_time, 1.0);
-  ASSERT_EQ(scene->contacts.size(), 1u);
-  EXPECT_EQ(scene->contacts[0].slave, "cylinder.outer");
+  expect_same_system(scene->system(), *api.system);
+  EXPECT_TRUE(scene->settings.static_only);
+  EXPECT_EQ(scene->settings.statics.settings.increments, 4);
+  EXPECT_EQ(scene->settings.statics.settings.load_time, 1.0);
+  ASSERT_EQ(scene->model->contacts().size(), 1u);
+  EXPECT_EQ(scene->model->contacts()[0].slave, "cylinder.outer");
   // The prescribed push agrees with the test's at every increment.
   for (double t : {0.25, 0.5, 0.75, 1.0}) {
-    State a = initial_state(*scene->system), b = initial_state(*api.system);
-    for (const auto& p : scene->system->prescribed())
+    State a = initial_state(scene->system()), b = initial_state(*api.system);
+    for (const auto& p : scene->system().prescribed())
       if (p.position) a.q[p.dof] = p.position(t);
     for (const auto& p : api.system->prescribed())
       if (p.position) b.q[p.dof] = p.position(t);
@@ -607,38 +608,38 @@ TEST(ExamplesFe, BearingRollersIsTheTestsSystem) {
   const auto scene = load_scene(example("bearing_rollers"));
   const auto api =
       test_systems::bearing(1e4, 10, 48, 40, test_systems::BearingSupport::RadialRollers);
-  expect_same_system(*scene->system, *api.system);
-  EXPECT_TRUE(scene->system->prescribed().empty());
-  EXPECT_TRUE(scene->system->symmetry().rotation);
-  EXPECT_FALSE(scene->system->symmetry().translation);
-  EXPECT_EQ(scene->statics.hold_names.size(), 2u);
-  ASSERT_TRUE(scene->tolerances.angular_momentum_balance_rel.has_value());
-  EXPECT_EQ(*scene->tolerances.angular_momentum_balance_rel, 1e-8);
+  expect_same_system(scene->system(), *api.system);
+  EXPECT_TRUE(scene->system().prescribed().empty());
+  EXPECT_TRUE(scene->system().symmetry().rotation);
+  EXPECT_FALSE(scene->system().symmetry().translation);
+  EXPECT_EQ(scene->settings.statics.hold_rotation.size(), 2u);
+  ASSERT_TRUE(scene->settings.tolerances.angular_momentum_balance_rel.has_value());
+  EXPECT_EQ(*scene->settings.tolerances.angular_momentum_balance_rel, 1e-8);
 }
 
 TEST(ExamplesFe, PatchTestIsAStaticAnalysis) {
   const auto scene = load_scene(example("patch_test"));
-  EXPECT_TRUE(scene->static_only);
-  ASSERT_EQ(scene->bodies.size(), 2u);
-  EXPECT_EQ(scene->bodies[0].n_elements, 15);  // 5 x 3
-  EXPECT_EQ(scene->bodies[1].n_elements, 21);  // 7 x 3
-  ASSERT_EQ(scene->contacts.size(), 1u);
-  EXPECT_EQ(scene->contacts[0].candidates, 8);  // the upper block's bottom nodes
-  ASSERT_TRUE(scene->tolerances.contact_pressure_spread.has_value());
-  EXPECT_EQ(*scene->tolerances.contact_pressure_spread, 1e-8);
+  EXPECT_TRUE(scene->settings.static_only);
+  ASSERT_EQ(scene->model->bodies().size(), 2u);
+  EXPECT_EQ(scene->model->bodies()[0].info.n_elements, 15);  // 5 x 3
+  EXPECT_EQ(scene->model->bodies()[1].info.n_elements, 21);  // 7 x 3
+  ASSERT_EQ(scene->model->contacts().size(), 1u);
+  EXPECT_EQ(scene->model->contacts()[0].candidates, 8);  // the upper block's bottom nodes
+  ASSERT_TRUE(scene->settings.tolerances.contact_pressure_spread.has_value());
+  EXPECT_EQ(*scene->settings.tolerances.contact_pressure_spread, 1e-8);
   // Rollers at the base (y), the top pushed in y: 6 + 8 prescribed dofs.
-  EXPECT_EQ(scene->system->prescribed().size(), 14u);
+  EXPECT_EQ(scene->system().prescribed().size(), 14u);
 }
 
 TEST(ExamplesFe, FreeRingFliesFree) {
   const auto scene = load_scene(example("free_ring"));
-  const System& s = *scene->system;
-  ASSERT_EQ(scene->bodies.size(), 1u);
+  const System& s = scene->system();
+  ASSERT_EQ(scene->model->bodies().size(), 1u);
   EXPECT_EQ(s.n_nodes(), 128);
   EXPECT_EQ(s.n_unilateral(), 0);
   EXPECT_TRUE(s.prescribed().empty());
   EXPECT_TRUE(s.symmetry().translation && s.symmetry().rotation);
-  EXPECT_EQ(std::lround(scene->time.t_end / scene->time.dt), 1000);
+  EXPECT_EQ(std::lround(scene->settings.time.t_end / scene->settings.time.dt), 1000);
   const State st = initial_state(s);
   const Quantities q = measure(s, st.q, st.v, 0.0);
   EXPECT_GT(q.linear_momentum.norm(), 0.1);

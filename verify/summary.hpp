@@ -14,6 +14,7 @@
 #pragma once
 
 #include <nlohmann/json.hpp>
+#include <iosfwd>
 #include <optional>
 #include <string>
 #include <vector>
@@ -131,6 +132,11 @@ Summary summarize(const RunInfo& info, const System& system, const Recorder& rec
 /// The summary as JSON, keys in a reading order (what ran, what it cost,
 /// how well it conserved, whether it finished).
 nlohmann::ordered_json to_json(const Summary& summary);
+
+/// The summary as the table `emdae run` prints: one "label  value" row per
+/// figure, the checks, and the files written to `dir`.
+void print_summary(std::ostream& out, const Summary& summary, const std::string& dir,
+                   bool fields = false, bool contact_table = false);
 
 /// Writes `summary` to `path` atomically; throws std::runtime_error on failure.
 void write_summary(const std::string& path, const Summary& summary);
