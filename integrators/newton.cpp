@@ -11,20 +11,14 @@
 #include <stdexcept>
 #include <string>
 
+#include "integrators/sundials_support.hpp"
+
 namespace emdae {
 
 namespace {
 
-void check(int flag, const char* call) {
-  if (flag < 0)
-    throw std::runtime_error(std::string(call) + " failed with flag " + std::to_string(flag));
-}
-
-template <class T>
-T* check_ptr(T* p, const char* call) {
-  if (!p) throw std::runtime_error(std::string(call) + " returned NULL");
-  return p;
-}
+using sundials::check;
+using sundials::check_ptr;
 
 // A scaled Newton step this small is at the round-off level of O(1) unknowns.
 constexpr double kRoundOffStep = 1e-15;
@@ -37,11 +31,12 @@ KluSolver::Counters sum(const KluSolver::Counters& a, const KluSolver::Counters&
 }  // namespace
 
 struct NewtonSolver::Impl {
-  SUNContext ctx = nullptr;
-  N_Vector u = nullptr, uscale = nullptr, fscale = nullptr;
-  SUNMatrix jmat = nullptr;
+  // Declared in the order of their dependence: freed the other way round.
+  sundials::Context ctx = sundials::make_context();
+  sundials::Vector u, uscale, fscale;
+  sundials::Matrix jmat;
   std::unique_ptr<KluSolver> klu;
-  void* kin = nullptr;
+  sundials::Memory<KINFree> kin;
   int n = -1;
 
   // Per-solve state reachable from the callbacks.
@@ -53,23 +48,14 @@ struct NewtonSolver::Impl {
   SparseMatrix jac;
   KluSolver::Counters before;  // of the solvers released since
 
-  Impl() { check(SUNContext_Create(nullptr, &ctx), "SUNContext_Create"); }
-  ~Impl() {
-    release();
-    if (ctx) SUNContext_Free(&ctx);
-  }
+  ~Impl() { release(); }
 
   void release() {
-    if (kin) KINFree(&kin);
+    kin.reset();
     if (klu) before = sum(before, klu->counters());
     klu.reset();
-    if (jmat) SUNMatDestroy(jmat);
-    for (N_Vector* v : {&u, &uscale, &fscale})
-      if (*v) {
-        N_VDestroy(*v);
-        *v = nullptr;
-      }
-    jmat = nullptr;
+    jmat.reset();
+    for (sundials::Vector* v : {&u, &uscale, &fscale}) v->reset();
     n = -1;
   }
 
@@ -77,34 +63,34 @@ struct NewtonSolver::Impl {
     if (size == n) return;
     release();
     n = size;
-    u = check_ptr(N_VNew_Serial(n, ctx), "N_VNew_Serial");
-    uscale = check_ptr(N_VNew_Serial(n, ctx), "N_VNew_Serial");
-    fscale = check_ptr(N_VNew_Serial(n, ctx), "N_VNew_Serial");
-    N_VConst(1.0, uscale);
-    jmat = check_ptr(SUNSparseMatrix(n, n, std::max(1, n), CSC_MAT, ctx), "SUNSparseMatrix");
+    for (sundials::Vector* v : {&u, &uscale, &fscale}) *v = sundials::make_vector(n, ctx.get());
+    N_VConst(1.0, uscale.get());
+    jmat.reset(
+        check_ptr(SUNSparseMatrix(n, n, std::max(1, n), CSC_MAT, ctx.get()), "SUNSparseMatrix"));
     // AMD: our Jacobians are structurally symmetric (FE stiffness, constraint
     // blocks G and G^T), where AMD orders with far less fill than KLU's
     // default COLAMD (measured on the bearing: see docs/performance.md). The
     // solver keeps its analysis across KINSol calls while the pattern holds.
-    klu = std::make_unique<KluSolver>(ctx, KluSolver::Ordering::Amd, KluSolver::Pivoting::Kept);
-    kin = check_ptr(KINCreate(ctx), "KINCreate");
-    check(KINInit(kin, &Impl::residual_cb, u), "KINInit");
-    check(KINSetUserData(kin, this), "KINSetUserData");
-    check(KINSetLinearSolver(kin, klu->get(), jmat), "KINSetLinearSolver");
-    check(KINSetJacFn(kin, &Impl::jacobian_cb), "KINSetJacFn");
+    klu = std::make_unique<KluSolver>(ctx.get(), KluSolver::Ordering::Amd,
+                                      KluSolver::Pivoting::Kept);
+    kin.reset(check_ptr(KINCreate(ctx.get()), "KINCreate"));
+    check(KINInit(kin.get(), &Impl::residual_cb, u.get()), "KINInit");
+    check(KINSetUserData(kin.get(), this), "KINSetUserData");
+    check(KINSetLinearSolver(kin.get(), klu->get(), jmat.get()), "KINSetLinearSolver");
+    check(KINSetJacFn(kin.get(), &Impl::jacobian_cb), "KINSetJacFn");
     // Exact Newton: a fresh Jacobian at every iteration.
-    check(KINSetMaxSetupCalls(kin, 1), "KINSetMaxSetupCalls");
-    check(KINSetNumMaxIters(kin, s.max_iterations), "KINSetNumMaxIters");
+    check(KINSetMaxSetupCalls(kin.get(), 1), "KINSetMaxSetupCalls");
+    check(KINSetNumMaxIters(kin.get(), s.max_iterations), "KINSetNumMaxIters");
     // A step stalled at round-off ends the iteration; the result is then
     // accepted if its residual meets `tolerance` (a tolerance below the
     // round-off of the residual would otherwise never be met).
-    check(KINSetFuncNormTol(kin, s.tolerance), "KINSetFuncNormTol");
-    check(KINSetScaledStepTol(kin, kRoundOffStep), "KINSetScaledStepTol");
-    check(KINSetMaxNewtonStep(kin, 1e100), "KINSetMaxNewtonStep");
-    check(KINSetErrHandlerFn(kin, &Impl::error_cb, this), "KINSetErrHandlerFn");
+    check(KINSetFuncNormTol(kin.get(), s.tolerance), "KINSetFuncNormTol");
+    check(KINSetScaledStepTol(kin.get(), kRoundOffStep), "KINSetScaledStepTol");
+    check(KINSetMaxNewtonStep(kin.get(), 1e100), "KINSetMaxNewtonStep");
+    check(KINSetErrHandlerFn(kin.get(), &Impl::error_cb, this), "KINSetErrHandlerFn");
     // EMDAE_KINSOL_PRINT=1|2|3 shows KINSOL's own iteration log (on stdout).
     const char* print = std::getenv("EMDAE_KINSOL_PRINT");
-    check(KINSetPrintLevel(kin, print ? std::atoi(print) : 0), "KINSetPrintLevel");
+    check(KINSetPrintLevel(kin.get(), print ? std::atoi(print) : 0), "KINSetPrintLevel");
   }
 
   static void error_cb(int, const char* module, const char* function, char* msg, void* data) {
@@ -170,17 +156,18 @@ NewtonResult NewtonSolver::solve(NewtonProblem& problem, Vec& x, const Vec& resi
   m.last_message.clear();
   m.scale = residual_scale;
   m.last_residual = 0.0;
-  Eigen::Map<Vec>(N_VGetArrayPointer(m.u), n) = x;
-  Eigen::Map<Vec>(N_VGetArrayPointer(m.fscale), n) = residual_scale;
+  Eigen::Map<Vec>(N_VGetArrayPointer(m.u.get()), n) = x;
+  Eigen::Map<Vec>(N_VGetArrayPointer(m.fscale.get()), n) = residual_scale;
 
   const int flag =
-      KINSol(m.kin, m.u, settings_.line_search ? KIN_LINESEARCH : KIN_NONE, m.uscale, m.fscale);
+      KINSol(m.kin.get(), m.u.get(), settings_.line_search ? KIN_LINESEARCH : KIN_NONE,
+             m.uscale.get(), m.fscale.get());
   m.problem = nullptr;
   if (m.error) std::rethrow_exception(m.error);
 
   long iters = 0;
-  KINGetNumNonlinSolvIters(m.kin, &iters);
-  x = Eigen::Map<const Vec>(N_VGetArrayPointer(m.u), n);
+  KINGetNumNonlinSolvIters(m.kin.get(), &iters);
+  x = Eigen::Map<const Vec>(N_VGetArrayPointer(m.u.get()), n);
 
   NewtonResult r;
   r.iterations = static_cast<int>(iters);
