@@ -662,7 +662,8 @@ TEST(ExamplesFeRun, FreeRingConservesEverything) {
   EXPECT_FALSE(s.contains("contact_window"));                // no contact declared
   EXPECT_FALSE(s.contains("energy_balance_rel_error_max"));  // no loads
   EXPECT_EQ(read_lines(dir / "o/history.csv")[0],
-            "t,dt,kinetic,potential,total_energy,Lx,Ly,J,phi_max,newton_iterations,cutbacks");
+            "t,dt,kinetic,potential,total_energy,Lx,Ly,J,phi_max,newton_iterations,cutbacks,"
+            "energy_error,linear_momentum_error,angular_momentum_error");
 }
 
 TEST(ExamplesFeRun, RingImpactReportsTheContact) {

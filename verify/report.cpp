@@ -210,37 +210,42 @@ Table read_history(const fs::path& path) {
 
 // Series, Axis and Figure: verify/page.hpp.
 
-// One run's curves, derived from its history as the recorder derives the
-// summary's maxima, so that a plot's peak is the summary's figure.
+// One run's curves, read from its history: the errors are the recorder's
+// own per-row figures (Recorder: Sample::energy_error, ...), so that a
+// plot's peak is the summary's figure and nothing is computed twice.
 struct RunCurves {
   std::vector<double> t;
   std::vector<Series> energies;  // kinetic, potential, total (, total - work)
   Series energy_error;
-  bool energy_relative = true;
   bool energy_balance = false;  // loads: H - H0 - W is the error
-  std::optional<Series> linear_error, angular_error;
-  bool angular_relative = true;
-  std::string linear_note, angular_note;
-  std::vector<Series> constraint;  // phi_max and any further residual columns
+  Series linear_error, angular_error;
+  std::vector<Series> constraint;  // phi_max, and gap_violation_max with contact
   Series newton, cutbacks;
   std::vector<Series> contact;  // active contact nodes, when recorded
   std::vector<Series> events;   // contact events (impacts, releases) per step
   std::vector<Series> penetration;
 };
 
-bool starts_with(const std::string& s, const std::string& prefix) {
-  return s.compare(0, prefix.size(), prefix) == 0;
-}
+// Which momentum errors a run's summary reports (the others are not
+// conserved by its system), and why not.
+struct MomentumFigures {
+  bool linear = false, angular = false;
+  std::string linear_note, angular_note;
+};
 
-bool contains(const std::string& s, const std::string& part) {
-  return s.find(part) != std::string::npos;
+MomentumFigures momentum_figures(const Json& summary) {
+  const auto reported = [&summary](const char* key) {
+    return summary.contains(key) && !summary[key].is_null();
+  };
+  return {reported("linear_momentum_error_max"), reported("angular_momentum_rel_error_max"),
+          summary.value("linear_momentum_note", ""), summary.value("angular_momentum_note", "")};
 }
 
 std::vector<double> zeros_like(std::size_t n) {
   return std::vector<double>(n, 0.0);
 }
 
-RunCurves derive_curves(const Table& h, const Json& summary) {
+RunCurves derive_curves(const Table& h) {
   RunCurves c;
   const auto* t = h.column("t");
   if (!t) throw std::runtime_error("history has no column 't'");
@@ -250,67 +255,25 @@ RunCurves derive_curves(const Table& h, const Json& summary) {
     const auto* x = h.column(name);
     return x ? *x : std::vector<double>(n, kNaN);
   };
-  const auto series = [&c](const std::string& label, std::vector<double> y) {
-    return Series{label, c.t, std::move(y)};
+  const auto series = [&c, &col](const std::string& label, const std::string& column) {
+    return Series{label, c.t, col(column)};
   };
   if (n == 0) return c;
 
-  const auto kinetic = col("kinetic"), potential = col("potential");
-  const auto total = col("total_energy");
+  c.energies = {series("kinetic", "kinetic"), series("potential", "potential"),
+                series("total", "total_energy")};
   const auto* work = h.column("external_work");
-  c.energies = {series("kinetic", kinetic), series("potential", potential), series("total", total)};
   c.energy_balance = work != nullptr;
   if (work) {
+    const auto total = col("total_energy");
     std::vector<double> balance(n);
     for (std::size_t i = 0; i < n; ++i) balance[i] = total[i] - (*work)[i];
-    c.energies.push_back(series("total - external work", balance));
+    c.energies.push_back(Series{"total - external work", c.t, balance});
   }
-  // The recorder's energy scale: H_0 alone can vanish while the energy in
-  // play does not.
-  const double scale = std::max(std::abs(total[0]), kinetic[0] + std::abs(potential[0]));
-  c.energy_relative = scale > 0;
-  std::vector<double> e(n);
-  for (std::size_t i = 0; i < n; ++i) {
-    const double w = work ? (*work)[i] - (*work)[0] : 0.0;
-    const double drift = std::abs(total[i] - total[0] - w);
-    e[i] = c.energy_relative ? drift / scale : drift;
-  }
-  c.energy_error = series(c.energy_balance ? "energy balance error" : "energy error", e);
-
-  // Momenta: only where the summary says the system conserves them.
-  if (summary.contains("linear_momentum_error_max") &&
-      !summary["linear_momentum_error_max"].is_null()) {
-    std::vector<double> l(n, 0.0);
-    for (const char* name : {"Lx", "Ly", "Lz"}) {
-      const auto* x = h.column(name);
-      if (!x) continue;
-      for (std::size_t i = 0; i < n; ++i) l[i] += std::pow((*x)[i] - (*x)[0], 2);
-    }
-    for (auto& x : l) x = std::sqrt(x);
-    c.linear_error = series("linear momentum error", l);
-  }
-  c.linear_note = summary.value("linear_momentum_note", "");
-  if (summary.contains("angular_momentum_rel_error_max") &&
-      !summary["angular_momentum_rel_error_max"].is_null()) {
-    std::vector<double> d(n, 0.0);
-    double j0 = 0.0;
-    const bool three_d = h.column("Jx") != nullptr;
-    for (const char* name :
-         three_d ? std::vector<const char*>{"Jx", "Jy", "Jz"} : std::vector<const char*>{"J"}) {
-      const auto* x = h.column(name);
-      if (!x) continue;
-      j0 += (*x)[0] * (*x)[0];
-      for (std::size_t i = 0; i < n; ++i) d[i] += std::pow((*x)[i] - (*x)[0], 2);
-    }
-    j0 = std::sqrt(j0);
-    c.angular_note = summary.value("angular_momentum_note", "");
-    // The summary knows when J_0 is zero by symmetry and the error absolute.
-    c.angular_relative = j0 > 0 && !starts_with(c.angular_note, "absolute");
-    for (auto& x : d) x = c.angular_relative ? std::sqrt(x) / j0 : std::sqrt(x);
-    c.angular_error = series("angular momentum error", d);
-  } else {
-    c.angular_note = summary.value("angular_momentum_note", "");
-  }
+  c.energy_error =
+      series(c.energy_balance ? "energy balance error" : "energy error", "energy_error");
+  c.linear_error = series("linear momentum error", "linear_momentum_error");
+  c.angular_error = series("angular momentum error", "angular_momentum_error");
 
   // Counts of a step start with the first step: row 0 is the initial state.
   const auto per_step = [&c](const std::string& label, const std::vector<double>& y) {
@@ -321,21 +284,12 @@ RunCurves derive_curves(const Table& h, const Json& summary) {
     }
     return s;
   };
-  // Residual columns: phi_max first, then whatever else the history records
-  // on constraint residuals (velocity level, per kind).
-  for (std::size_t k = 0; k < h.names.size(); ++k) {
-    const std::string& name = h.names[k];
-    if (starts_with(name, "phi") || name == "gap_violation_max")
-      c.constraint.push_back(series(name, h.columns[k]));
-    else if (contains(name, "active"))
-      c.contact.push_back(series(name, h.columns[k]));
-    else if (name == "contact_events")
-      c.events.push_back(per_step(name, h.columns[k]));
-    else if (contains(name, "penetration"))
-      c.penetration.push_back(series(name, h.columns[k]));
-  }
-  std::stable_partition(c.constraint.begin(), c.constraint.end(),
-                        [](const Series& s) { return s.label == "phi_max"; });
+  // The residuals on position level, phi_max first; contact's columns.
+  for (const char* name : {"phi_max", "gap_violation_max"})
+    if (h.column(name)) c.constraint.push_back(series(name, name));
+  if (h.column("active_contacts")) c.contact.push_back(series("active_contacts", "active_contacts"));
+  if (h.column("contact_events")) c.events.push_back(per_step("contact_events", col("contact_events")));
+  if (h.column("penetration_max")) c.penetration.push_back(series("penetration_max", "penetration_max"));
   c.newton = per_step("Newton iterations", col("newton_iterations"));
   const auto* cut = h.column("cutbacks");
   c.cutbacks = per_step("cut-backs", cut ? *cut : zeros_like(n));
@@ -674,10 +628,14 @@ std::string floor_caption(bool log) {
 void drop_zero_curves(std::vector<Figure>& figs);
 
 // The figures of one run's report.
-std::vector<Figure> run_figures(const RunCurves& c, const Json& summary,
+std::vector<Figure> run_figures(const RunCurves& c, const Summary& summary,
                                 const std::optional<double>& energy_limit,
                                 const std::optional<double>& constraint_limit) {
   std::vector<Figure> figs;
+  // Relative or absolute: as the recorder measured (with loads, against the
+  // largest energy held, which is zero only when nothing ever moved).
+  const bool energy_relative = c.energy_balance || summary.energy_error_relative;
+  const bool angular_relative = summary.angular_momentum_error_relative;
   Figure energy{"energy",
                 "Energy",
                 "energy",
@@ -694,7 +652,7 @@ std::vector<Figure> run_figures(const RunCurves& c, const Json& summary,
 
   Figure err{"energy-error",
              c.energy_balance ? "Energy balance error" : "Energy error",
-             c.energy_relative ? "relative error" : "absolute error",
+             energy_relative ? "relative error" : "absolute error",
              Axis::Log,
              {c.energy_error},
              energy_limit,
@@ -703,7 +661,10 @@ std::vector<Figure> run_figures(const RunCurves& c, const Json& summary,
   err.caption = c.energy_balance ? "|H<sub>n</sub> &minus; H<sub>0</sub> &minus; "
                                    "W<sub>ext</sub>(t<sub>n</sub>)|"
                                  : "|H<sub>n</sub> &minus; H<sub>0</sub>|";
-  if (c.energy_relative) err.caption += " / max(|H<sub>0</sub>|, T<sub>0</sub> + |V<sub>0</sub>|)";
+  if (c.energy_balance)
+    err.caption += " / the largest energy held so far";
+  else if (energy_relative)
+    err.caption += " / max(|H<sub>0</sub>|, T<sub>0</sub> + |V<sub>0</sub>|)";
   err.caption += c.energy_balance
                      ? "; its maximum is the summary's energy_balance_rel_error_max (the "
                        "summary's energy_rel_error_max covers the load-free intervals only)."
@@ -713,30 +674,32 @@ std::vector<Figure> run_figures(const RunCurves& c, const Json& summary,
 
   Figure lin{
       "linear-momentum", "Linear momentum error", "|L - L_0|", Axis::Log, {}, std::nullopt, "", ""};
-  if (c.linear_error) {
-    lin.series = {*c.linear_error};
+  if (summary.linear_momentum_error_max) {
+    lin.series = {c.linear_error};
     lin.caption = "|L<sub>n</sub> &minus; L<sub>0</sub>| (absolute)." + floor_caption(true);
   } else {
-    lin.note = c.linear_note.empty() ? "not conserved by this system" : c.linear_note;
+    lin.note = summary.linear_momentum_note.empty() ? "not conserved by this system"
+                                                    : summary.linear_momentum_note;
   }
   figs.push_back(lin);
 
   Figure ang{"angular-momentum",
              "Angular momentum error",
-             c.angular_relative ? "|J - J_0| / |J_0|" : "|J - J_0|",
+             angular_relative ? "|J - J_0| / |J_0|" : "|J - J_0|",
              Axis::Log,
              {},
              std::nullopt,
              "",
              ""};
-  if (c.angular_error) {
-    ang.series = {*c.angular_error};
-    ang.caption = c.angular_relative
+  if (summary.angular_momentum_rel_error_max) {
+    ang.series = {c.angular_error};
+    ang.caption = angular_relative
                       ? "|J<sub>n</sub> &minus; J<sub>0</sub>| / |J<sub>0</sub>|, about the origin."
                       : "|J<sub>n</sub> &minus; J<sub>0</sub>| (absolute: J<sub>0</sub> = 0).";
     ang.caption += floor_caption(true);
   } else {
-    ang.note = c.angular_note.empty() ? "not conserved by this system" : c.angular_note;
+    ang.note = summary.angular_momentum_note.empty() ? "not conserved by this system"
+                                                     : summary.angular_momentum_note;
   }
   figs.push_back(ang);
 
@@ -744,7 +707,7 @@ std::vector<Figure> run_figures(const RunCurves& c, const Json& summary,
              c.constraint, constraint_limit,      "",        ""};
   // Without bilateral constraints phi_max is zero by construction: only the
   // contact residual is worth a line.
-  if (summary.value("constraints", 0) == 0) {
+  if (summary.constraints == 0) {
     phi.series.erase(std::remove_if(phi.series.begin(), phi.series.end(),
                                     [](const Series& s) { return s.label == "phi_max"; }),
                      phi.series.end());
@@ -979,13 +942,9 @@ std::string summary_table_html(const Json& summary) {
 
 // The first number whose key contains `part`, at the top level or one
 // object down (e.g. contact.penetration_max).
-std::optional<double> find_number(const Json& summary, const std::string& part) {
-  for (const auto& [key, value] : summary.items()) {
-    if (contains(key, part) && value.is_number()) return value.get<double>();
-    if (value.is_object())
-      for (const auto& [k, v] : value.items())
-        if (contains(k, part) && v.is_number()) return v.get<double>();
-  }
+// The number under `key` of summary.json, if it has one.
+std::optional<double> find_number(const Json& summary, const std::string& key) {
+  if (summary.contains(key) && summary[key].is_number()) return summary[key].get<double>();
   return std::nullopt;
 }
 
@@ -1057,9 +1016,9 @@ void write_report(const std::string& dir, const ReportInfo& info, const Summary&
     if (summary.static_analysis) {
       figures = static_figures(table, check_limit(json, "constraint"));
     } else {
-      const RunCurves curves = derive_curves(table, json);
+      const RunCurves curves = derive_curves(table);
       figures = run_figures(
-          curves, json,
+          curves, summary,
           check_limit(json, curves.energy_balance ? "energy_balance_rel" : "energy_rel"),
           check_limit(json, "constraint"));
     }
@@ -1099,7 +1058,7 @@ void write_comparison(const std::string& dir, const ReportInfo& info,
   std::vector<Loaded> loaded;
   // Contact figures get columns when some run has them.
   const std::vector<std::pair<std::string, std::string>> contact_columns = {
-      {"gap_violation", "gap violation"}, {"penetration", "penetration"}};
+      {"gap_violation_max", "gap violation"}, {"penetration_max", "penetration"}};
   std::vector<bool> shown(contact_columns.size(), false);
   for (const auto& r : runs) {
     Loaded l{&r, std::nullopt, std::nullopt, ""};
@@ -1116,7 +1075,7 @@ void write_comparison(const std::string& dir, const ReportInfo& info,
           if (find_number(*l.summary, contact_columns[k].first)) shown[k] = true;
       }
       if (l.summary && fs::exists(run_dir / "history.csv"))
-        l.curves = derive_curves(read_history(run_dir / "history.csv"), *l.summary);
+        l.curves = derive_curves(read_history(run_dir / "history.csv"));
     } catch (const std::exception& e) {
       l.problem = e.what();
     }
@@ -1250,14 +1209,15 @@ void write_comparison(const std::string& dir, const ReportInfo& info,
       return s;
     };
     figs[0].series.push_back(named(c.energy_error));
-    if (c.linear_error)
-      figs[1].series.push_back(named(*c.linear_error));
+    const MomentumFigures m = momentum_figures(*l.summary);
+    if (m.linear)
+      figs[1].series.push_back(named(c.linear_error));
     else
-      linear_note = c.linear_note;
-    if (c.angular_error)
-      figs[2].series.push_back(named(*c.angular_error));
+      linear_note = m.linear_note;
+    if (m.angular)
+      figs[2].series.push_back(named(c.angular_error));
     else
-      angular_note = c.angular_note;
+      angular_note = m.angular_note;
     if (!c.constraint.empty()) {
       // One line per scheme: the worst of its residual columns (bilateral
       // constraints and, with contact, the active contact nodes).

@@ -90,6 +90,7 @@ Summary summarize(const RunInfo& info, const System& system, const Recorder& rec
   s.linear_momentum_note = recorder.conservation().linear_reason;
   s.angular_momentum_rel_error_max = recorder.angular_momentum_rel_error_max();
   s.angular_momentum_note = recorder.conservation().angular_reason;
+  s.angular_momentum_error_relative = recorder.angular_momentum_error_is_relative();
   if (s.angular_momentum_rel_error_max && !recorder.angular_momentum_error_is_relative())
     s.angular_momentum_note = "absolute error: initial angular momentum is zero";
   s.linear_momentum_balance_error_max = recorder.linear_momentum_balance_error_max();

@@ -95,6 +95,7 @@ struct Summary {
   std::optional<double> linear_momentum_error_max;
   std::string linear_momentum_note;
   std::optional<double> angular_momentum_rel_error_max;
+  bool angular_momentum_error_relative = true;  // false: |J_0| ~ 0, the error is absolute
   std::string angular_momentum_note;
   std::optional<double> linear_momentum_balance_error_max;
   std::string linear_momentum_balance_note;
