@@ -35,7 +35,7 @@
 #include <string>
 #include <vector>
 
-#include "contact_systems.hpp"
+#include "paper_scenes.hpp"
 #include "core/material.hpp"
 #include "core/mesh.hpp"
 #include "integrators/driver.hpp"

@@ -21,7 +21,7 @@
 //            Error = max nodal |q - q_ref| at t_end (the ring's radius is
 //            10); energy error = max_t |H(t) - H(0)| / H(0).
 //  impact    the paper's two-ring impact, ring_impact(120, 10, 20, 64, 1, 47,
-//            50) of tests/contact_systems.hpp, t_end = 20, dt = 0.01, with em,
+//            50) of tests/paper_scenes.hpp, t_end = 20, dt = 0.01, with em,
 //            midpoint, galpha, ida and em without impact location: energy,
 //            linear and angular momentum errors, max |gap| of active nodes,
 //            min gap of inactive ones, contact window, Newton iterations, CPU
@@ -55,7 +55,7 @@
 #include <string>
 #include <vector>
 
-#include "contact_systems.hpp"
+#include "paper_scenes.hpp"
 #include "core/assembly.hpp"
 #include "core/material.hpp"
 #include "core/mesh.hpp"

@@ -53,7 +53,7 @@
 #include <string>
 #include <vector>
 
-#include "contact_systems.hpp"
+#include "paper_scenes.hpp"
 #include "core/load.hpp"
 #include "core/mesh.hpp"
 #include "core/particles.hpp"

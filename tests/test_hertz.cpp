@@ -21,7 +21,7 @@
 #include <cmath>
 #include <cstdlib>
 
-#include "contact_systems.hpp"
+#include "paper_scenes.hpp"
 #include "integrators/statics.hpp"
 
 namespace emdae {

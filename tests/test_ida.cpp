@@ -38,7 +38,7 @@
 #include <vector>
 
 #include "integrators/schemes.hpp"
-#include "contact_systems.hpp"
+#include "paper_scenes.hpp"
 #include "core/load.hpp"
 #include "core/particles.hpp"
 #include "core/quantities.hpp"

@@ -1,7 +1,7 @@
 // Scene files with FE bodies, contact, Dirichlet sets, loads and statics:
 // every malformed input names the file, line and key (and the CLI exits 2
 // without creating output); every example builds exactly the system the C++
-// API builds for it (tests/contact_systems.hpp); and the three FE examples run
+// API builds for it (tests/paper_scenes.hpp); and the three FE examples run
 // through the emdae command with the figures their comments promise.
 #include <gtest/gtest.h>
 #include <sys/wait.h>
@@ -19,7 +19,7 @@
 
 #include "integrators/schemes.hpp"
 #include "cli/scene.hpp"
-#include "contact_systems.hpp"
+#include "paper_scenes.hpp"
 #include "core/quantities.hpp"
 #include "integrators/driver.hpp"
 #include "integrators/stepper.hpp"
