@@ -244,6 +244,18 @@ std::vector<Malformed> malformed_fe_scenes() {
        kTime + kRings + "[scheme]\nname = \"ida\"\nmax_order = 6\n",
        "max_order",
        {"key 'scheme.max_order'", "1..5", "received 6"}},
+      {"ida_table_max_order_out_of_range",
+       kTime + kRings + "[scheme]\nname = \"em\"\n[scheme.ida]\nmax_order = 6\n",
+       "max_order",
+       {"key 'scheme.ida.max_order'", "1..5", "received 6"}},
+      {"galpha_table_unknown_key",
+       kTime + kRings + "[scheme.galpha]\nrho = 0.5\n",
+       "rho =",
+       {"key 'scheme.galpha.rho'", "unknown key", "did you mean 'rho_inf'?"}},
+      {"ida_key_given_twice",
+       kTime + kRings + "[scheme]\nrtol = 1e-6\n[scheme.ida]\natol = 1e-6\nrtol = 1e-7\n",
+       "rtol = 1e-6",
+       {"key 'scheme.rtol'", "given twice", "scheme.ida.rtol"}},
       {"search_margin_negative",
        with(kValid, "master = \"b.outer\"\n", "master = \"b.outer\"\nsearch_margin = -1.0\n"),
        "search_margin",
@@ -560,6 +572,39 @@ TEST(ExamplesFe, BearingIsThePapersBearing) {
   ASSERT_EQ(scene->model->loads().size(), 1u);
   EXPECT_TRUE(scene->model->loads_vanish(0.5, 2.0));
   EXPECT_FALSE(scene->model->loads_vanish(0.0, 0.5));
+}
+
+// A scene carries the settings of every scheme: [scheme.ida] and
+// [scheme.galpha] are read whatever the scheme, without a warning; the flat
+// keys of old still work, and warn (naming the table) when unused.
+TEST(SceneFe, EverySchemeKeepsItsOwnTable) {
+  TempDir dir;
+  auto scene = load_scene(dir.write(
+      "t.toml", kTime + kRings +
+                    "[scheme]\nname = \"em\"\nlocate_impacts = false\ngap_tolerance = 1e-9\n"
+                    "[scheme.ida]\nrtol = 1e-5\natol = 1e-6\nmax_order = 2\n"
+                    "[scheme.galpha]\nrho_inf = 0.8\n"));
+  EXPECT_TRUE(scene->warnings.empty()) << scene->warnings.front();
+  const SchemeSettings& s = scene->settings.schemes;
+  EXPECT_EQ(s.ida.rtol, 1e-5);
+  EXPECT_EQ(s.ida.atol, 1e-6);
+  EXPECT_EQ(s.ida.max_order, 2);
+  EXPECT_EQ(s.galpha.rho_inf, 0.8);
+  EXPECT_EQ(s.galpha.alpha_f, GeneralizedAlphaSettings::chung_hulbert(0.8).alpha_f);
+  EXPECT_FALSE(s.contact.locate_impacts);
+  EXPECT_EQ(s.contact.gap_tolerance, 1e-9);
+  // The stepper made from them has them (ida: the gap tolerance is the shared one).
+  auto ida = make_stepper("ida", scene->system(), s);
+  EXPECT_EQ(dynamic_cast<const IdaStepper&>(*ida).settings().max_order, 2);
+  EXPECT_EQ(dynamic_cast<const IdaStepper&>(*ida).gap_tolerance(), 1e-9);
+  auto galpha = make_stepper("galpha", scene->system(), s);
+  EXPECT_EQ(dynamic_cast<const GeneralizedAlphaStepper&>(*galpha).settings().rho_inf, 0.8);
+
+  scene = load_scene(dir.write("u.toml", kTime + kRings + "[scheme]\nrho_inf = 0.5\n"));
+  EXPECT_EQ(scene->settings.schemes.galpha.rho_inf, 0.5);
+  ASSERT_EQ(scene->warnings.size(), 1u);
+  EXPECT_NE(scene->warnings[0].find("only used by scheme galpha, not em"), std::string::npos);
+  EXPECT_NE(scene->warnings[0].find("scheme.galpha.rho_inf"), std::string::npos);
 }
 
 // Every scene in examples/ loads cleanly: no errors, no warnings.
