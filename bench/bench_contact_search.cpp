@@ -36,9 +36,9 @@
 
 #include "contact/mortar_contact.hpp"
 #include "contact/search.hpp"
-#include "core/model.hpp"
 #include "core/material.hpp"
 #include "core/mesh.hpp"
+#include "core/model.hpp"
 #include "core/system.hpp"
 
 namespace {

@@ -35,13 +35,13 @@
 #include <string>
 #include <vector>
 
-#include "paper_scenes.hpp"
 #include "core/material.hpp"
 #include "core/mesh.hpp"
 #include "integrators/driver.hpp"
-#include "integrators/statics.hpp"
 #include "integrators/schemes.hpp"
+#include "integrators/statics.hpp"
 #include "integrators/stepper.hpp"
+#include "paper_scenes.hpp"
 
 namespace {
 
@@ -440,8 +440,7 @@ void analyse(const Captured& m, const System& s, const std::string& dump) {
 
 // --- scenes ---------------------------------------------------------------------
 
-RunOutcome run_dynamics(const System& s, State& st, double dt, double t_end,
-                        SchemeSettings ss = {},
+RunOutcome run_dynamics(const System& s, State& st, double dt, double t_end, SchemeSettings ss = {},
                         NewtonSettings ns = NewtonSettings{1e-10, 25, false}) {
   ss.newton = ns;
   auto stepper = make_stepper("em", s, ss);

@@ -55,7 +55,6 @@
 #include <string>
 #include <vector>
 
-#include "paper_scenes.hpp"
 #include "core/assembly.hpp"
 #include "core/material.hpp"
 #include "core/mesh.hpp"
@@ -63,6 +62,7 @@
 #include "integrators/driver.hpp"
 #include "integrators/schemes.hpp"
 #include "integrators/stepper.hpp"
+#include "paper_scenes.hpp"
 #include "particle_systems.hpp"
 #include "pendulum.hpp"
 

@@ -43,10 +43,10 @@ std::string scheme_text(const Model& model, const RunSettings& s) {
   if (s.scheme == "ida") own = fmt::format(", rtol {}, atol {}", ss.ida.rtol, ss.ida.atol);
   if (s.scheme == "galpha") own = fmt::format(", rho_inf {}", ss.galpha.rho_inf);
   if (!model.contacts().empty())
-    own += fmt::format(", impacts {}", ss.contact.locate_impacts ? "located" : "not located") +
-           (ss.contact.gap_tolerance > 0
-                ? fmt::format(", gap tolerance {}", ss.contact.gap_tolerance)
-                : "");
+    own +=
+        fmt::format(", impacts {}", ss.contact.locate_impacts ? "located" : "not located") +
+        (ss.contact.gap_tolerance > 0 ? fmt::format(", gap tolerance {}", ss.contact.gap_tolerance)
+                                      : "");
   return fmt::format("{} (Newton tolerance {}, at most {} iterations, line search {}{})", s.scheme,
                      ss.newton.tolerance, ss.newton.max_iterations,
                      ss.newton.line_search ? "on" : "off", own);
@@ -77,8 +77,7 @@ int command_check(const std::string& scene_path, const std::vector<std::string>&
   try {
     scene = load(scene_path, set_overrides(overrides));
   } catch (const SceneError& e) {
-    fmt::print(err, "emdae: error: {}\n", e.what());
-    return kExitBadInput;
+    return bad_input(err, e.what());
   }
   const Model& model = *scene->model;
   const RunSettings& s = scene->settings;
@@ -106,15 +105,15 @@ int command_check(const std::string& scene_path, const std::vector<std::string>&
                              model.particles().size(), fixed));
   }
   for (const auto& b : bodies)
-    row("body", fmt::format("{}: {}; {} nodes, {} elements, mass {:.6g}; {}", b.name,
-                            b.mesh.description, b.info.n_nodes, b.info.n_elements, b.mass(),
-                            b.material.describe()));
+    row("body",
+        fmt::format("{}: {}; {} nodes, {} elements, mass {:.6g}; {}", b.name, b.mesh.description,
+                    b.info.n_nodes, b.info.n_elements, b.mass(), b.material.describe()));
   row("dofs", fmt::format("{} ({} free, {} prescribed)", sys.n_dofs(),
                           sys.n_dofs() - static_cast<int>(sys.prescribed().size()),
                           sys.prescribed().size()));
   for (const auto& d : model.dirichlet())
-    row("dirichlet", fmt::format("{}: {}, {} nodes, {} dofs", d.nodes, d.describe(), d.n_nodes,
-                                 d.n_dofs));
+    row("dirichlet",
+        fmt::format("{}: {}, {} nodes, {} dofs", d.nodes, d.describe(), d.n_nodes, d.n_dofs));
   row("constraints", count_by_kind(sys.constraints()));
   row("potentials", count_by_kind(sys.potentials()));
   for (const auto& pair : model.contacts())
@@ -140,9 +139,9 @@ int command_check(const std::string& scene_path, const std::vector<std::string>&
     row("analysis", "static (no [time]): no time steps, no scheme");
   } else {
     row("scheme", scheme_text(model, s));
-    row("time", fmt::format("dt = {}, t_end = {} ({} steps), min_dt = {}", s.time.dt, s.time.t_end,
-                            steps,
-                            s.time.min_dt > 0 ? fmt::format("{}", s.time.min_dt) : "dt/1024"));
+    row("time",
+        fmt::format("dt = {}, t_end = {} ({} steps), min_dt = {}", s.time.dt, s.time.t_end, steps,
+                    s.time.min_dt > 0 ? fmt::format("{}", s.time.min_dt) : "dt/1024"));
   }
   const char* unit = s.static_only ? "increment" : "step";
   std::string fields;

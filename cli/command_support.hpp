@@ -16,6 +16,16 @@ namespace emdae {
 /// "key=value" assignments of --set, each its own origin.
 std::vector<SceneOverride> set_overrides(const std::vector<std::string>& assignments);
 
+/// The overrides of a command: --set's, then those of the shorthand options
+/// given (--scheme, --dt, --t-end; empty: not given), each named after its
+/// option. Command-line values win over --set, which wins over the file.
+std::vector<SceneOverride> command_overrides(const std::vector<std::string>& assignments,
+                                             const std::string& scheme, const std::string& dt,
+                                             const std::string& t_end);
+
+/// Prints "emdae: error: MESSAGE" and returns kExitBadInput.
+int bad_input(std::ostream& err, const std::string& message);
+
 /// The scene at `path`, or the built-in default scene when `path` is empty.
 std::unique_ptr<Scene> load(const std::string& path, const std::vector<SceneOverride>& overrides);
 

@@ -19,35 +19,23 @@ namespace fs = std::filesystem;
 int command_compare(const CompareOptions& options, std::ostream& out, std::ostream& err) {
   // The scene and the scheme names are checked before anything is run or
   // written: a typo must not cost the runs of the other schemes.
-  std::vector<SceneOverride> overrides = set_overrides(options.overrides);
-  if (!options.dt.empty()) overrides.push_back({"time.dt=" + options.dt, "--dt " + options.dt});
-  if (!options.t_end.empty())
-    overrides.push_back({"time.t_end=" + options.t_end, "--t-end " + options.t_end});
   std::unique_ptr<Scene> scene;
   try {
-    scene = load(options.scene_path, overrides);
+    scene = load(options.scene_path,
+                 command_overrides(options.overrides, "", options.dt, options.t_end));
   } catch (const SceneError& e) {
-    fmt::print(err, "emdae: error: {}\n", e.what());
-    return kExitBadInput;
+    return bad_input(err, e.what());
   }
-  if (scene->settings.static_only) {
-    fmt::print(err, "emdae: error: {}\n", static_scene_refused(*scene, "compare"));
-    return kExitBadInput;
-  }
+  if (scene->settings.static_only) return bad_input(err, static_scene_refused(*scene, "compare"));
   std::string problem;
   const std::vector<std::string> schemes = parse_schemes(options.schemes, problem);
-  if (!problem.empty()) {
-    fmt::print(err, "emdae: error: {}\n", problem);
-    return kExitBadInput;
-  }
+  if (!problem.empty()) return bad_input(err, problem);
   const std::string dir =
       options.out_dir.empty() ? "out/" + scene->settings.name + "-compare" : options.out_dir;
-  std::error_code ec;
-  fs::create_directories(dir, ec);
-  if (ec || !fs::is_directory(dir)) {
-    fmt::print(err, "emdae: error: cannot create output folder '{}': {}\n", dir,
-               ec ? ec.message() : "exists and is not a folder");
-    return kExitBadInput;
+  try {
+    create_output_folder(dir);
+  } catch (const OutputError& e) {
+    return bad_input(err, e.what());
   }
 
   // Each scheme in turn, each into its own folder with its own report; one

@@ -14,6 +14,12 @@ namespace emdae {
 
 namespace {
 
+std::string known_list() {
+  std::string k;
+  for (const auto& s : known_schemes()) k += (k.empty() ? "" : ", ") + s;
+  return k;
+}
+
 constexpr const char* kExitCodesHelp =
     "Exit codes:\n"
     "  0    success\n"
@@ -26,6 +32,37 @@ constexpr const char* kExitCodesHelp =
     "\n"
     "Without arguments emdae runs its built-in default scene (the paper's two-ring\n"
     "impact, examples/ring_impact.toml) with scheme em and writes out/default/.";
+
+// The options several subcommands share, with one wording.
+void scene_argument(CLI::App* c, std::string& path) {
+  c->add_option("scene", path, "Scene file (TOML)")->required()->type_name("FILE");
+}
+
+void schemes_option(CLI::App* c, std::string& schemes, const char* verb) {
+  c->add_option(
+       "--schemes", schemes,
+       std::string("Comma-separated schemes to ") + verb + " (known: " + known_list() + ")")
+      ->required()
+      ->type_name("A,B,...");
+}
+
+void dt_option(CLI::App* c, std::string& dt) {
+  c->add_option("--dt", dt, "Time step, overriding the scene's time.dt")->type_name("X");
+}
+
+void t_end_option(CLI::App* c, std::string& t_end) {
+  c->add_option("--t-end", t_end, "End time, overriding the scene's time.t_end")->type_name("T");
+}
+
+void out_option(CLI::App* c, std::string& dir, const char* default_folder) {
+  c->add_option("--out", dir, std::string("Output folder (default: ") + default_folder + ")")
+      ->type_name("DIR");
+}
+
+void set_option(CLI::App* c, std::vector<std::string>& assignments,
+                const char* help = "Override a scene value (as for run)") {
+  c->add_option("--set", assignments, help)->allow_extra_args(false)->type_name("KEY=VALUE");
+}
 
 }  // namespace
 
@@ -44,29 +81,16 @@ int emdae_main(int argc, char** argv) {
                                      "Run one scene with one scheme; write a history "
                                      "(history.csv), a summary (summary.json) and a "
                                      "report (report.html).");
-  run->add_option("scene", run_options.scene_path, "Scene file (TOML)")
-      ->required()
-      ->type_name("FILE");
-  const std::string known = [] {
-    std::string k;
-    for (const auto& s : known_schemes()) k += (k.empty() ? "" : ", ") + s;
-    return k;
-  }();
+  scene_argument(run, run_options.scene_path);
   run->add_option("--scheme", run_options.scheme,
-                  "Time-stepping scheme, overriding the scene's (known: " + known + ")")
+                  "Time-stepping scheme, overriding the scene's (known: " + known_list() + ")")
       ->type_name("NAME");
-  run->add_option("--dt", run_options.dt, "Time step, overriding the scene's time.dt")
-      ->type_name("X");
-  run->add_option("--t-end", run_options.t_end, "End time, overriding the scene's time.t_end")
-      ->type_name("T");
-  run->add_option("--out", run_options.out_dir,
-                  "Output folder (default: out/<scene name>-<scheme>)")
-      ->type_name("DIR");
-  run->add_option("--set", run_options.overrides,
-                  "Override a scene value, e.g. --set time.dt=0.005 or "
-                  "--set 'particles[0].mass=2' (repeatable)")
-      ->allow_extra_args(false)
-      ->type_name("KEY=VALUE");
+  dt_option(run, run_options.dt);
+  t_end_option(run, run_options.t_end);
+  out_option(run, run_options.out_dir, "out/<scene name>-<scheme>");
+  set_option(run, run_options.overrides,
+             "Override a scene value, e.g. --set time.dt=0.005 or "
+             "--set 'particles[0].mass=2' (repeatable)");
   run->add_flag("-q,--quiet", run_options.quiet, "No progress lines and no summary table");
   run->footer(kExitCodesHelp);
 
@@ -75,26 +99,12 @@ int emdae_main(int argc, char** argv) {
       "compare",
       "Run one scene with several schemes, each into DIR/<scheme>/ with its own report, "
       "and write DIR/compare.html: their error curves on common axes and their figures.");
-  compare->add_option("scene", compare_options.scene_path, "Scene file (TOML)")
-      ->required()
-      ->type_name("FILE");
-  compare
-      ->add_option("--schemes", compare_options.schemes,
-                   "Comma-separated schemes to run (known: " + known + ")")
-      ->required()
-      ->type_name("A,B,...");
-  compare->add_option("--dt", compare_options.dt, "Time step, overriding the scene's time.dt")
-      ->type_name("X");
-  compare
-      ->add_option("--t-end", compare_options.t_end, "End time, overriding the scene's time.t_end")
-      ->type_name("T");
-  compare
-      ->add_option("--out", compare_options.out_dir,
-                   "Output folder (default: out/<scene name>-compare)")
-      ->type_name("DIR");
-  compare->add_option("--set", compare_options.overrides, "Override a scene value (as for run)")
-      ->allow_extra_args(false)
-      ->type_name("KEY=VALUE");
+  scene_argument(compare, compare_options.scene_path);
+  schemes_option(compare, compare_options.schemes, "run");
+  dt_option(compare, compare_options.dt);
+  t_end_option(compare, compare_options.t_end);
+  out_option(compare, compare_options.out_dir, "out/<scene name>-compare");
+  set_option(compare, compare_options.overrides);
   compare->add_flag("-q,--quiet", compare_options.quiet, "No progress lines and no table");
   compare->footer(std::string(kExitCodesHelp) +
                   "\n\ncompare exits with the worst code of its runs; a scheme that refuses "
@@ -108,14 +118,8 @@ int emdae_main(int argc, char** argv) {
       "(ida: at each tolerance) and compare its state at t_end with a reference run (scheme em "
       "at a much smaller step); write DIR/study.csv, study.json and study.html (error against "
       "step size, error against CPU time) and print the table.");
-  study->add_option("scene", study_options.scene_path, "Scene file (TOML)")
-      ->required()
-      ->type_name("FILE");
-  study
-      ->add_option("--schemes", study_options.schemes,
-                   "Comma-separated schemes to study (known: " + known + ")")
-      ->required()
-      ->type_name("A,B,...");
+  scene_argument(study, study_options.scene_path);
+  schemes_option(study, study_options.schemes, "study");
   CLI::Option* dts_option =
       study
           ->add_option("--dts", study_dts,
@@ -132,15 +136,9 @@ int emdae_main(int argc, char** argv) {
       ->add_option("--reference-dt", study_options.reference_dt,
                    "Step of the reference run, scheme em (default: the smallest of --dts / 8)")
       ->type_name("H");
-  study->add_option("--t-end", study_options.t_end, "End time, overriding the scene's time.t_end")
-      ->type_name("T");
-  study
-      ->add_option("--out", study_options.out_dir,
-                   "Output folder (default: out/<scene name>-study)")
-      ->type_name("DIR");
-  study->add_option("--set", study_options.overrides, "Override a scene value (as for run)")
-      ->allow_extra_args(false)
-      ->type_name("KEY=VALUE");
+  t_end_option(study, study_options.t_end);
+  out_option(study, study_options.out_dir, "out/<scene name>-study");
+  set_option(study, study_options.overrides);
   study->add_flag("-q,--quiet", study_options.quiet, "No progress lines and no table");
   study->footer(
       std::string(kExitCodesHelp) +
@@ -158,10 +156,8 @@ int emdae_main(int argc, char** argv) {
   std::vector<std::string> check_overrides;
   CLI::App* check = app.add_subcommand(
       "check", "Validate a scene and show what would be built, without running it.");
-  check->add_option("scene", check_path, "Scene file (TOML)")->required()->type_name("FILE");
-  check->add_option("--set", check_overrides, "Override a scene value (as for run)")
-      ->allow_extra_args(false)
-      ->type_name("KEY=VALUE");
+  scene_argument(check, check_path);
+  set_option(check, check_overrides);
   check->footer(kExitCodesHelp);
 
   try {

@@ -45,7 +45,6 @@ class SignalGuard {
   void (*old_term_)(int) = SIG_DFL;
 };
 
-
 // Progress of a run on stderr. On a terminal: one line redrawn in place
 // (\r, then erase to the end of the line) at most ten times a second, with
 // an estimate of the time left from the simulated time covered so far.

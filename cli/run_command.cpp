@@ -18,6 +18,24 @@ std::vector<SceneOverride> set_overrides(const std::vector<std::string>& assignm
   return out;
 }
 
+std::vector<SceneOverride> command_overrides(const std::vector<std::string>& assignments,
+                                             const std::string& scheme, const std::string& dt,
+                                             const std::string& t_end) {
+  std::vector<SceneOverride> overrides = set_overrides(assignments);
+  const auto flag = [&overrides](const std::string& value, const char* key, const char* name) {
+    if (!value.empty()) overrides.push_back({std::string(key) + "=" + value, name + (" " + value)});
+  };
+  flag(scheme, "scheme.name", "--scheme");
+  flag(dt, "time.dt", "--dt");
+  flag(t_end, "time.t_end", "--t-end");
+  return overrides;
+}
+
+int bad_input(std::ostream& err, const std::string& message) {
+  fmt::print(err, "emdae: error: {}\n", message);
+  return kExitBadInput;
+}
+
 std::unique_ptr<Scene> load(const std::string& path, const std::vector<SceneOverride>& overrides) {
   if (path.empty())
     return load_scene_text(default_scene_text,
@@ -50,19 +68,12 @@ int exit_code(const RunResult& result) {
 }
 
 int run_scene(const RunOptions& options, std::ostream& out, std::ostream& err, RunRecord& record) {
-  const auto bad_input = [&](const std::string& message) {
-    fmt::print(err, "emdae: error: {}\n", message);
+  const auto refuse = [&](const std::string& message) {
     record.message = message;
-    return kExitBadInput;
+    return bad_input(err, message);
   };
-  // Command-line values win over --set, which wins over the file.
-  std::vector<SceneOverride> overrides = set_overrides(options.overrides);
-  const auto flag = [&overrides](const std::string& value, const char* key, const char* name) {
-    if (!value.empty()) overrides.push_back({std::string(key) + "=" + value, name + (" " + value)});
-  };
-  flag(options.scheme, "scheme.name", "--scheme");
-  flag(options.dt, "time.dt", "--dt");
-  flag(options.t_end, "time.t_end", "--t-end");
+  const std::vector<SceneOverride> overrides =
+      command_overrides(options.overrides, options.scheme, options.dt, options.t_end);
 
   // Everything that can be wrong with the input is found here, before any
   // output exists.
@@ -70,7 +81,7 @@ int run_scene(const RunOptions& options, std::ostream& out, std::ostream& err, R
   const std::string problem = prepare_run(options.scene_path, overrides, scene);
   if (scene)
     for (const auto& w : scene->warnings) fmt::print(err, "emdae: warning: {}\n", w);
-  if (!problem.empty()) return bad_input(problem);
+  if (!problem.empty()) return refuse(problem);
   RunSettings& settings = scene->settings;
   // A static analysis has no scheme: its folder is named after what it is.
   settings.out_dir =
@@ -84,7 +95,7 @@ int run_scene(const RunOptions& options, std::ostream& out, std::ostream& err, R
   } catch (const OutputError& e) {
     // A folder that could be made is the run's, even when its history could not.
     if (std::filesystem::is_directory(settings.out_dir)) record.dir = settings.out_dir;
-    return bad_input(e.what());
+    return refuse(e.what());
   } catch (const std::exception& e) {
     fmt::print(err, "emdae: error: {}\n", e.what());
     return kExitInternal;

@@ -90,9 +90,9 @@ Mesh Builder::mesh(const Fields& f) const {
     const std::string path = (base / file).string();
     try {
       Mesh mesh = read_gmsh(path, surface);
-      mesh.description = fmt::format("gmsh {}{}, {} elements", file,
-                                     surface.empty() ? "" : " (" + surface + ")",
-                                     mesh.n_elements());
+      mesh.description =
+          fmt::format("gmsh {}{}, {} elements", file, surface.empty() ? "" : " (" + surface + ")",
+                      mesh.n_elements());
       return mesh;
     } catch (const std::exception& e) {
       m.fail_key("file", std::string(e.what()) + ", received \"" + file + "\"");
@@ -153,9 +153,9 @@ std::string Builder::set_ref(const Fields& f, std::string_view k, const toml::no
                              Model::SetKind kind) const {
   const char* kind_name = kind == Model::SetKind::Nodes ? "node set" : "edge set";
   if (!n.is_string())
-    f.fail_at(n, k,
-              std::string("must name a ") + kind_name + " as \"body.set\", received " +
-                  show_typed(n));
+    f.fail_at(
+        n, k,
+        std::string("must name a ") + kind_name + " as \"body.set\", received " + show_typed(n));
   const std::string& text = n.as_string()->get();
   try {
     model().find_set(text, kind, std::string(k));

@@ -78,8 +78,8 @@ void Builder::parse_link(const Fields& f) {
   // step; allowed, but almost certainly not what the scene meant.
   const Vec d = p.position - q.position, dv = p.velocity - q.velocity;
   if (std::abs(d.dot(dv)) > 1e-9 * d.norm() * (p.velocity.norm() + q.velocity.norm()))
-    warn(f.where(), "initial velocities of '" + a + "' and '" + b +
-                        "' change the length of their rigid link");
+    warn(f.where(),
+         "initial velocities of '" + a + "' and '" + b + "' change the length of their rigid link");
 }
 
 // An anchor is a rigid link to a fixed point: of one particle, or of every

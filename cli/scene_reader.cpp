@@ -1,12 +1,12 @@
 // The scene reader: the table of sections in the order they are read, and
 // the whole read of a file (TOML parse, overrides, sections, last checks).
+#include "cli/scene_reader.hpp"
+
 #include <cerrno>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
-
-#include "cli/scene_reader.hpp"
 
 namespace emdae {
 
@@ -29,8 +29,7 @@ void Builder::finish() {
   try {
     model().validate();
   } catch (const ModelError& e) {
-    if (e.key() == "particles")
-      fail(particle_where_.begin()->second, e.key(), e.what());
+    if (e.key() == "particles") fail(particle_where_.begin()->second, e.key(), e.what());
     if (e.key().empty()) throw SceneError(loc_.start() + ": " + e.what());
     fail(loc_.start(), e.key(), e.what());
   }

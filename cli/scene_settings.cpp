@@ -88,8 +88,8 @@ void Builder::parse_scheme(const Fields& f) {
                              const auto& read) {
     for (const auto& k : keys)
       if (f.has(k) && f.has(scheme))
-        f.fail_key(k, fmt::format("given twice: here and as scheme.{}.{}, received {}", scheme,
-                                  k, show(*f.find(k))));
+        f.fail_key(k, fmt::format("given twice: here and as scheme.{}.{}, received {}", scheme, k,
+                                  show(*f.find(k))));
     if (f.has(scheme)) {
       const Fields t = f.table(scheme, "the settings of scheme " + std::string(scheme),
                                std::string("[scheme.") + scheme + "]");
@@ -112,8 +112,7 @@ void Builder::parse_scheme(const Fields& f) {
   ss.contact.gap_tolerance =
       f.optional_non_negative("gap_tolerance").value_or(ss.contact.gap_tolerance);
   ss.newton.tolerance = f.optional_positive("newton_tolerance").value_or(1e-10);
-  ss.newton.max_iterations =
-      static_cast<int>(f.integer_in("newton_max_iterations", 20, 1, 1000));
+  ss.newton.max_iterations = static_cast<int>(f.integer_in("newton_max_iterations", 20, 1, 1000));
   ss.newton.line_search = f.boolean("line_search", false);
 }
 

@@ -96,25 +96,21 @@ std::string list_text(const std::vector<double>& values) {
 }  // namespace
 
 int command_study(const StudyOptions& options, std::ostream& out, std::ostream& err) {
-  const auto bad_input = [&err](const std::string& message) {
-    fmt::print(err, "emdae: error: {}\n", message);
-    return kExitBadInput;
-  };
+  const auto refuse = [&err](const std::string& message) { return bad_input(err, message); };
   // Everything is checked before anything runs or is written: the scene, the
   // lists, and every run of the study as its scene and stepper.
-  std::vector<SceneOverride> base = set_overrides(options.overrides);
-  if (!options.t_end.empty())
-    base.push_back({"time.t_end=" + options.t_end, "--t-end " + options.t_end});
+  const std::vector<SceneOverride> base =
+      command_overrides(options.overrides, "", "", options.t_end);
   std::unique_ptr<Scene> scene;
   try {
     scene = load(options.scene_path, base);
   } catch (const SceneError& e) {
-    return bad_input(e.what());
+    return refuse(e.what());
   }
-  if (scene->settings.static_only) return bad_input(static_scene_refused(*scene, "study"));
+  if (scene->settings.static_only) return refuse(static_scene_refused(*scene, "study"));
   std::string problem;
   const std::vector<std::string> schemes = parse_schemes(options.schemes, problem);
-  if (!problem.empty()) return bad_input(problem);
+  if (!problem.empty()) return refuse(problem);
   const bool has_ida = std::find(schemes.begin(), schemes.end(), "ida") != schemes.end();
   const bool has_steps =
       std::any_of(schemes.begin(), schemes.end(), [](const std::string& s) { return s != "ida"; });
@@ -123,25 +119,25 @@ int command_study(const StudyOptions& options, std::ostream& out, std::ostream& 
   if (options.dts) {
     dts = parse_values("--dts", *options.dts, "step size", std::numeric_limits<double>::infinity(),
                        problem);
-    if (!problem.empty()) return bad_input(problem);
+    if (!problem.empty()) return refuse(problem);
   }
   std::vector<double> tols = {1e-4, 1e-6, 1e-8};
   if (options.tols) {
     tols = parse_values("--tols", *options.tols, "tolerance", 1.0, problem);
-    if (!problem.empty()) return bad_input(problem);
+    if (!problem.empty()) return refuse(problem);
   }
   double reference_dt = dts.back() / 8;
   std::string reference_text = fmt::format("{:g}", reference_dt);
   if (!options.reference_dt.empty()) {
     const auto x = parse_number(options.reference_dt);
     if (!x || !(*x > 0))
-      return bad_input(fmt::format("--reference-dt: must be a positive number, received '{}'",
-                                   options.reference_dt));
+      return refuse(fmt::format("--reference-dt: must be a positive number, received '{}'",
+                                options.reference_dt));
     reference_dt = *x;
     reference_text = options.reference_dt;
   }
   if (has_steps && !(reference_dt < dts.back()))
-    return bad_input(fmt::format(
+    return refuse(fmt::format(
         "--reference-dt: must be smaller than the smallest step of --dts ({:g}), received {}",
         dts.back(), reference_text));
 
@@ -186,7 +182,7 @@ int command_study(const StudyOptions& options, std::ostream& out, std::ostream& 
   for (const auto& p : plan) {
     std::unique_ptr<Scene> s;
     const std::string why = prepare_run(options.scene_path, p.overrides, s);
-    if (!why.empty()) return bad_input(p.label + ": " + why);
+    if (!why.empty()) return refuse(p.label + ": " + why);
     for (const auto& w : s->warnings)
       if (std::find(warnings.begin(), warnings.end(), w) == warnings.end()) warnings.push_back(w);
   }
@@ -199,11 +195,11 @@ int command_study(const StudyOptions& options, std::ostream& out, std::ostream& 
 
   const std::string dir =
       options.out_dir.empty() ? "out/" + scene->settings.name + "-study" : options.out_dir;
-  std::error_code ec;
-  fs::create_directories(dir, ec);
-  if (ec || !fs::is_directory(dir))
-    return bad_input(fmt::format("cannot create output folder '{}': {}", dir,
-                                 ec ? ec.message() : "exists and is not a folder"));
+  try {
+    create_output_folder(dir);
+  } catch (const OutputError& e) {
+    return refuse(e.what());
+  }
 
   Study study;
   study.scene = scene->settings.name;

@@ -131,7 +131,9 @@ std::string closest_match(const std::string& word, const std::vector<std::string
   // Or an abbreviation: "newton_tol" -> "newton_tolerance".
   if (word.size() >= 3)
     for (const auto& c : candidates)
-      if (c.size() > word.size() && scene_reader::edit_distance(word, c.substr(0, word.size())) == 0) return c;
+      if (c.size() > word.size() &&
+          scene_reader::edit_distance(word, c.substr(0, word.size())) == 0)
+        return c;
   return "";
 }
 

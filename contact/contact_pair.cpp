@@ -17,12 +17,13 @@ const ContactPair& add_mortar_contact(Model& model, const std::string& slave,
   if (name.empty()) name = slave + "/" + master;
   for (const auto& other : model.contacts())
     if (other.name == name) throw ModelError("name", "duplicate contact name");
-  ContactPair pair{name, slave, master, static_cast<int>(s.edges.size()),
-                   static_cast<int>(m.edges.size()), 0, 0};
+  ContactPair pair{
+      name, slave, master, static_cast<int>(s.edges.size()), static_cast<int>(m.edges.size()),
+      0,    0};
   std::unique_ptr<MortarContact> contact;
   try {
-    contact = std::make_unique<MortarContact>(model.system(), std::move(s), std::move(m), name,
-                                              options);
+    contact =
+        std::make_unique<MortarContact>(model.system(), std::move(s), std::move(m), name, options);
   } catch (const std::invalid_argument& e) {
     throw ModelError("", e.what());
   }

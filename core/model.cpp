@@ -24,6 +24,21 @@ std::string join(const std::vector<std::string>& items) {
   return out;
 }
 
+// The length of a rigid link between `between`: `length` when given, which
+// must then be the initial distance (the steppers assume Phi(q_0) = 0: a
+// length that disagrees would be an unannounced jump at the first step),
+// else the initial distance.
+double rigid_length(double length, double initial, const std::string& between) {
+  if (!(length > 0) && !(initial > 0))
+    throw ModelError(
+        "length", "missing, and " + between + " start at the same point: give length explicitly");
+  if (length > 0 && std::abs(length - initial) > 1e-9 * length)
+    throw ModelError("length", "differs from the initial distance " + number(initial) + " of " +
+                                   between +
+                                   " (the initial positions must satisfy the constraint)");
+  return length > 0 ? length : initial;
+}
+
 std::vector<int> component_list(Components c) {
   if (c == Components::X) return {0};
   if (c == Components::Y) return {1};
@@ -65,7 +80,8 @@ const Particle& Model::add_particle(const std::string& name, double mass, const 
   if (!(mass > 0)) throw ModelError("mass", "must be positive");
   Particle p{name, -1, fixed, mass, position, velocity.size() ? velocity : Vec::Zero(dim())};
   if (fixed && p.velocity.norm() > 0)
-    throw ModelError("velocity", "a fixed particle cannot move (drop the velocity or fixed = true)");
+    throw ModelError("velocity",
+                     "a fixed particle cannot move (drop the velocity or fixed = true)");
   p.node = system_->add_node(p.position, p.velocity);
   system_->add_mass(p.node, p.node, p.mass);
   if (fixed) system_->fix_node(p.node);
@@ -109,17 +125,9 @@ void Model::add_link(const std::string& a, const std::string& b, double length) 
   // would be rank deficient and every Newton solve singular.
   const auto pair = std::minmax(p.node, q.node);
   if (links_.count(pair)) throw ModelError("between", "a second rigid link between " + between);
-  const double initial = (p.position - q.position).norm();
-  if (!(length > 0) && !(initial > 0))
-    throw ModelError("length", "missing, and " + between +
-                                   " start at the same point: give length explicitly");
-  // The steppers assume Phi(q_0) = 0: a rigid length that disagrees with the
-  // initial positions would be an unannounced jump at the first step.
-  if (length > 0 && std::abs(length - initial) > 1e-9 * length)
-    throw ModelError("length", "differs from the initial distance " + number(initial) + " of " +
-                                   between + " (the initial positions must satisfy the constraint)");
+  const double l = rigid_length(length, (p.position - q.position).norm(), between);
   links_[pair] = true;
-  system_->add_constraint(make_link(*system_, p.node, q.node, length > 0 ? length : initial));
+  system_->add_constraint(make_link(*system_, p.node, q.node, l));
 }
 
 void Model::add_anchor(const std::string& particle, const Vec& point, double length) {
@@ -129,16 +137,10 @@ void Model::add_anchor(const std::string& particle, const Vec& point, double len
     throw ModelError("particle", "'" + particle +
                                      "' is anchored already (a second rigid link would be "
                                      "redundant)");
-  const std::string between = "'" + particle + "' and its anchor point";
-  const double initial = (p.position - point).norm();
-  if (!(length > 0) && !(initial > 0))
-    throw ModelError("length", "missing, and " + between +
-                                   " start at the same point: give length explicitly");
-  if (length > 0 && std::abs(length - initial) > 1e-9 * length)
-    throw ModelError("length", "differs from the initial distance " + number(initial) + " of " +
-                                   between + " (the initial positions must satisfy the constraint)");
+  const double l =
+      rigid_length(length, (p.position - point).norm(), "'" + particle + "' and its anchor point");
   anchored_.insert(p.node);
-  system_->add_constraint(make_anchor_link(*system_, p.node, point, length > 0 ? length : initial));
+  system_->add_constraint(make_anchor_link(*system_, p.node, point, l));
 }
 
 void Model::add_anchors(const std::string& nodes, const Vec& point) {
@@ -148,12 +150,15 @@ void Model::add_anchors(const std::string& nodes, const Vec& point) {
   for (int node : list) {
     const std::string what = "node " + std::to_string(node) + " of " + nodes;
     if (anchored_.count(node))
-      throw ModelError("nodes", what + " is anchored already (a second rigid link would be "
-                                       "redundant)");
+      throw ModelError("nodes", what +
+                                    " is anchored already (a second rigid link would be "
+                                    "redundant)");
     for (int c = 0; c < dim(); ++c)
       if (s.is_prescribed()[static_cast<std::size_t>(s.dof(node, c))])
-        throw ModelError("nodes",
-                         what + " is prescribed by a Dirichlet set ([[dirichlet]]): an anchor would be redundant");
+        throw ModelError(
+            "nodes",
+            what +
+                " is prescribed by a Dirichlet set ([[dirichlet]]): an anchor would be redundant");
     if (!((s.initial_positions().segment(s.dof(node, 0), dim()) - point).norm() > 0))
       throw ModelError("point", what + " lies on the anchor point: no distance to keep");
   }
@@ -165,7 +170,8 @@ void Model::add_anchors(const std::string& nodes, const Vec& point) {
 }
 
 void Model::add_gravity(const Vec& g) {
-  if (g.size() != dim()) throw ModelError("acceleration", fmt::format("must have {} components", dim()));
+  if (g.size() != dim())
+    throw ModelError("acceleration", fmt::format("must have {} components", dim()));
   // Zero gravity adds nothing, so that it does not break the symmetries.
   if (g.norm() == 0) return;
   for (const auto& p : particles_)
@@ -228,13 +234,12 @@ std::pair<const Body*, std::string> Model::find_set(const std::string& set, SetK
   if (dot == std::string::npos)
     throw ModelError(key, std::string("must name a ") + kind_name + " as \"body.set\"");
   const std::string body = set.substr(0, dot), name = set.substr(dot + 1);
-  const auto it = std::find_if(bodies_.begin(), bodies_.end(),
-                               [&](const Body& b) { return b.name == body; });
+  const auto it =
+      std::find_if(bodies_.begin(), bodies_.end(), [&](const Body& b) { return b.name == body; });
   if (it == bodies_.end()) throw ModelError(key, "unknown body '" + body + "'");
   const bool found =
       kind == SetKind::Nodes ? it->mesh.node_sets.count(name) : it->mesh.edge_sets.count(name);
-  if (!found)
-    throw ModelError(key, "body '" + body + "' has no " + kind_name + " '" + name + "'");
+  if (!found) throw ModelError(key, "body '" + body + "' has no " + kind_name + " '" + name + "'");
   return {&*it, name};
 }
 
@@ -248,7 +253,8 @@ std::vector<int> Model::nodes(const std::string& set) const {
 std::vector<std::array<int, 2>> Model::edges(const std::string& set) const {
   const auto [body, name] = find_set(set, SetKind::Edges, "on");
   std::vector<std::array<int, 2>> out;
-  for (const auto& e : body->mesh.edge_sets.at(name)) out.push_back({body->node(e[0]), body->node(e[1])});
+  for (const auto& e : body->mesh.edge_sets.at(name))
+    out.push_back({body->node(e[0]), body->node(e[1])});
   return out;
 }
 
@@ -371,8 +377,9 @@ bool Model::loads_vanish(double a, double b) const {
 
 void Model::validate() const {
   if (particles_.empty() && bodies_.empty())
-    throw ModelError("bodies", "missing: the scene has no [[bodies]] and no [[particles]], "
-                               "nothing to integrate");
+    throw ModelError("bodies",
+                     "missing: the scene has no [[bodies]] and no [[particles]], "
+                     "nothing to integrate");
   if (bodies_.empty() &&
       std::none_of(particles_.begin(), particles_.end(), [](const auto& p) { return !p.fixed; }))
     throw ModelError("particles", "every particle is fixed: nothing to integrate");

@@ -104,8 +104,8 @@ struct ModelLoad {
   enum class Type { Torque, BodyForce, Traction };
   std::string name;
   Type type = Type::Torque;
-  std::string on;           // "body.set", or the body for a body force
-  Vec magnitude;            // torque: one value; otherwise the vector
+  std::string on;                                // "body.set", or the body for a body force
+  Vec magnitude;                                 // torque: one value; otherwise the vector
   TimeFunction g = TimeFunction::constant(1.0);  // the dimensionless factor
 
   /// "torque 10000", "acceleration [0, -9.81]", "traction [0, -1]".

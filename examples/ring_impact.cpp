@@ -77,7 +77,8 @@ int main(int argc, char** argv) {
   // 5. What the scheme promises, through the impact: energy to the Newton
   //    tolerance, both momenta to round-off.
   const bool ok = result.finished() && s.contact && s.contact->first &&
-                  s.energy_rel_error_max < 1e-8 && s.linear_momentum_error_max.value_or(1) < 1e-10 &&
+                  s.energy_rel_error_max < 1e-8 &&
+                  s.linear_momentum_error_max.value_or(1) < 1e-10 &&
                   s.angular_momentum_rel_error_max.value_or(1) < 1e-10;
   return ok ? 0 : 1;
 }

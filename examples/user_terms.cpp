@@ -27,11 +27,11 @@
 #include <cmath>
 #include <cstdio>
 
-#include "integrators/schemes.hpp"
 #include "core/particles.hpp"
 #include "core/quantities.hpp"
 #include "core/user_term.hpp"
 #include "integrators/driver.hpp"
+#include "integrators/schemes.hpp"
 
 using namespace emdae;
 

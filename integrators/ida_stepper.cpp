@@ -502,9 +502,7 @@ struct IdaStepper::Impl {
     iters_before = iters();
   }
 
-  void create_context() {
-    ctx = sundials::make_context();
-  }
+  void create_context() { ctx = sundials::make_context(); }
 
   // (Re)allocates everything whose size is that of the DAE (2n + 2m) for the
   // current active set; y0 = (q, v, lambda, mu) gives the Jacobian's pattern.
@@ -515,8 +513,7 @@ struct IdaStepper::Impl {
     jmat.reset();
     m = m_sys + static_cast<int>(active.size());
     size = 2 * n + 2 * m;
-    for (VectorPtr* p : {&yy, &yp, &id, &yq, &ypq})
-      *p = sundials::make_vector(size, ctx.get());
+    for (VectorPtr* p : {&yy, &yp, &id, &yq, &ypq}) *p = sundials::make_vector(size, ctx.get());
     // Differential: free q and v. Algebraic (no error test): lambda, mu and
     // the prescribed q_i, v_i.
     auto ids = view(id.get());

@@ -71,8 +71,8 @@ struct NewtonSolver::Impl {
     // blocks G and G^T), where AMD orders with far less fill than KLU's
     // default COLAMD (measured on the bearing: see docs/performance.md). The
     // solver keeps its analysis across KINSol calls while the pattern holds.
-    klu = std::make_unique<KluSolver>(ctx.get(), KluSolver::Ordering::Amd,
-                                      KluSolver::Pivoting::Kept);
+    klu =
+        std::make_unique<KluSolver>(ctx.get(), KluSolver::Ordering::Amd, KluSolver::Pivoting::Kept);
     kin.reset(check_ptr(KINCreate(ctx.get()), "KINCreate"));
     check(KINInit(kin.get(), &Impl::residual_cb, u.get()), "KINInit");
     check(KINSetUserData(kin.get(), this), "KINSetUserData");
@@ -159,9 +159,8 @@ NewtonResult NewtonSolver::solve(NewtonProblem& problem, Vec& x, const Vec& resi
   Eigen::Map<Vec>(N_VGetArrayPointer(m.u.get()), n) = x;
   Eigen::Map<Vec>(N_VGetArrayPointer(m.fscale.get()), n) = residual_scale;
 
-  const int flag =
-      KINSol(m.kin.get(), m.u.get(), settings_.line_search ? KIN_LINESEARCH : KIN_NONE,
-             m.uscale.get(), m.fscale.get());
+  const int flag = KINSol(m.kin.get(), m.u.get(), settings_.line_search ? KIN_LINESEARCH : KIN_NONE,
+                          m.uscale.get(), m.fscale.get());
   m.problem = nullptr;
   if (m.error) std::rethrow_exception(m.error);
 

@@ -1,13 +1,12 @@
 #include "integrators/stepper.hpp"
 
-#include "integrators/schemes.hpp"
-
 #include <stdexcept>
 
 #include "integrators/energy_momentum.hpp"
 #include "integrators/generalized_alpha.hpp"
 #include "integrators/ida_stepper.hpp"
 #include "integrators/implicit_midpoint.hpp"
+#include "integrators/schemes.hpp"
 
 namespace emdae {
 
@@ -46,7 +45,8 @@ std::unique_ptr<Stepper> make_stepper(const std::string& name, const System& sys
                                       const SchemeSettings& settings) {
   MidpointFamilySettings midpoint;
   static_cast<ContactSettings&>(midpoint) = settings.contact;
-  if (name == "em") return std::make_unique<EnergyMomentumStepper>(system, settings.newton, midpoint);
+  if (name == "em")
+    return std::make_unique<EnergyMomentumStepper>(system, settings.newton, midpoint);
   if (name == "midpoint")
     return std::make_unique<ImplicitMidpointStepper>(system, settings.newton, midpoint);
   if (name == "ida") {

@@ -34,8 +34,8 @@ inline void check(int flag, const char* call) {
 inline void check(int flag, const char* call, char* (*flag_name)(long int)) {
   if (flag >= 0) return;
   char* name = flag_name(flag);
-  const std::string what = std::string(call) + " failed: " + (name ? name : "unknown flag") +
-                           " (" + std::to_string(flag) + ")";
+  const std::string what = std::string(call) + " failed: " + (name ? name : "unknown flag") + " (" +
+                           std::to_string(flag) + ")";
   std::free(name);
   throw std::runtime_error(what);
 }

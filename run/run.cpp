@@ -200,6 +200,14 @@ RunResult::End integrate_model(Stepper& stepper, State& state, const TimeSetting
 
 }  // namespace
 
+void create_output_folder(const std::string& dir) {
+  std::error_code ec;
+  fs::create_directories(dir, ec);
+  if (ec || !fs::is_directory(dir))
+    throw OutputError(fmt::format("cannot create output folder '{}': {}", dir,
+                                  ec ? ec.message() : "exists and is not a folder"));
+}
+
 std::string scheme_refusal(const Model& model, const RunSettings& settings) {
   // A static analysis has no scheme: the static solve makes its own steps.
   if (settings.static_only) return {};
@@ -217,13 +225,7 @@ RunResult run(Model& model, const RunSettings& settings, RunObserver* watcher) {
   const System& system = model.system();
   const std::string& dir = settings.out_dir;
   const bool writes = !dir.empty();
-  if (writes) {
-    std::error_code ec;
-    fs::create_directories(dir, ec);
-    if (ec || !fs::is_directory(dir))
-      throw OutputError(fmt::format("cannot create output folder '{}': {}", dir,
-                                    ec ? ec.message() : "exists and is not a folder"));
-  }
+  if (writes) create_output_folder(dir);
   const auto path = [&dir](const char* file) { return (fs::path(dir) / file).string(); };
 
   RunResult result;
@@ -240,9 +242,8 @@ RunResult run(Model& model, const RunSettings& settings, RunObserver* watcher) {
   std::unique_ptr<HistoryWriter> history;
   if (writes) {
     try {
-      history = std::make_unique<HistoryWriter>(path("history.csv"), system.dim(),
-                                                recorder.has_external_work(),
-                                                recorder.has_contact());
+      history = std::make_unique<HistoryWriter>(
+          path("history.csv"), system.dim(), recorder.has_external_work(), recorder.has_contact());
       history->write(recorder.initial());
     } catch (const std::exception& e) {
       throw OutputError(e.what());
@@ -296,10 +297,9 @@ RunResult run(Model& model, const RunSettings& settings, RunObserver* watcher) {
     if (result.finished()) {
       // Made after the equilibrium, which added and removed constraints of its own.
       const auto stepper = make_stepper(settings.scheme, system, settings.schemes);
-      result.end = integrate_model(*stepper, state, settings.time, recorder, info, observer,
-                                   [&](const State& s, const Sample& sample) {
-                                     keep(s, sample, false);
-                                   });
+      result.end =
+          integrate_model(*stepper, state, settings.time, recorder, info, observer,
+                          [&](const State& s, const Sample& sample) { keep(s, sample, false); });
     }
     observer.finished();
     // The last state always ends the fields too.

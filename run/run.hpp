@@ -93,11 +93,15 @@ class OutputError : public std::runtime_error {
 struct RunResult {
   enum class End { Finished, Failed, Interrupted, InternalError };
   End end = End::Finished;
-  Summary summary;  // summary.status says how it ended
-  State state;      // the last state reached
+  Summary summary;                             // summary.status says how it ended
+  State state;                                 // the last state reached
   bool fields = false, contact_table = false;  // fields.pvd, contact.csv written
   bool finished() const { return end == End::Finished; }
 };
+
+/// Creates the folder `dir` (and its parents) unless it is there; throws
+/// OutputError naming it and why not.
+void create_output_folder(const std::string& dir);
 
 /// Why `scheme` cannot run the model (the stepper refuses it), or "".
 std::string scheme_refusal(const Model& model, const RunSettings& settings);

@@ -80,8 +80,10 @@ inline Bearing bearing(double torque_peak = 1e4, int through = 10, int around_ou
   Model& m = *b.model;
   b.torque_peak = torque_peak;
   const Material mat = make_material(MaterialModel::SaintVenantKirchhoff, 1e5, 0.1, 0.001);
-  b.outer = m.add_body("outer_ring", ring_mesh({0, 0}, 40.0, 50.0, around_outer, through), mat).info;
-  b.inner = m.add_body("inner_ring", ring_mesh({0, 0}, 25.0, 40.05, around_inner, through), mat).info;
+  b.outer =
+      m.add_body("outer_ring", ring_mesh({0, 0}, 40.0, 50.0, around_outer, through), mat).info;
+  b.inner =
+      m.add_body("inner_ring", ring_mesh({0, 0}, 25.0, 40.05, around_inner, through), mat).info;
   if (support == BearingSupport::Clamped)
     m.fix("outer_ring.outer");
   else

@@ -16,12 +16,12 @@
 #include <cmath>
 #include <vector>
 
-#include "integrators/schemes.hpp"
-#include "paper_scenes.hpp"
-#include "run/run.hpp"
 #include "core/quantities.hpp"
 #include "integrators/driver.hpp"
+#include "integrators/schemes.hpp"
 #include "integrators/statics.hpp"
+#include "paper_scenes.hpp"
+#include "run/run.hpp"
 
 namespace emdae {
 namespace {
@@ -41,7 +41,8 @@ class TorqueImpulseWatch final : public RunObserver {
   explicit TorqueImpulseWatch(double impulse) : impulse_(impulse) {}
   void sampled(const State& state, const Sample& sample, const Recorder&) override {
     if (state.t >= 0.5 - 1e-9)
-      worst = std::max(worst, std::abs(sample.quantities.angular_momentum[0] - impulse_) / impulse_);
+      worst =
+          std::max(worst, std::abs(sample.quantities.angular_momentum[0] - impulse_) / impulse_);
   }
   double worst = 0.0;
 

@@ -12,14 +12,14 @@
 #include <cmath>
 #include <random>
 
-#include "integrators/schemes.hpp"
 #include "contact/jet.hpp"
 #include "contact/mortar.hpp"
-#include "paper_scenes.hpp"
-#include "run/run.hpp"
 #include "core/gradient.hpp"
 #include "core/quantities.hpp"
 #include "integrators/driver.hpp"
+#include "integrators/schemes.hpp"
+#include "paper_scenes.hpp"
+#include "run/run.hpp"
 
 namespace emdae {
 namespace {
@@ -193,8 +193,8 @@ TEST_P(RingImpactHard, EnergyMomentumConservesThroughImpact) {
   ASSERT_TRUE(f.ok()) << f.status;
   ASSERT_TRUE(f.contact && f.contact->last);
   print(c.name, f);
-  EXPECT_GE(f.contact->active_contacts_max, 1);        // they touched
-  EXPECT_LT(*f.contact->last, t_end - 2 * c.dt);       // and separated again
+  EXPECT_GE(f.contact->active_contacts_max, 1);   // they touched
+  EXPECT_LT(*f.contact->last, t_end - 2 * c.dt);  // and separated again
   EXPECT_LE(f.energy_rel_error_max, 1e-8);
   EXPECT_LE(f.linear_momentum_error_max.value_or(1), 1e-10);
   EXPECT_LE(f.angular_momentum_rel_error_max.value_or(1), 1e-10);

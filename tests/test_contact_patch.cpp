@@ -12,10 +12,10 @@
 #include <cmath>
 #include <numeric>
 
-#include "paper_scenes.hpp"
 #include "core/fe_element.hpp"
 #include "core/gradient.hpp"
 #include "integrators/statics.hpp"
+#include "paper_scenes.hpp"
 
 namespace emdae {
 namespace {
@@ -41,8 +41,8 @@ Blocks stacked_blocks(int n_lower, int n_upper, double squeeze, MaterialModel mo
   // otherwise slide freely on the frictionless interface).
   m.fix("lower.bottom", Components::Y);
   s.prescribe({s.dof(m.nodes("lower.bottom").front(), 0), {}, {}});
-  m.prescribe_displacement("upper.top", Eigen::Vector2d(0.0, -squeeze),
-                           TimeFunction::constant(1.0), Components::Y);
+  m.prescribe_displacement("upper.top", Eigen::Vector2d(0.0, -squeeze), TimeFunction::constant(1.0),
+                           Components::Y);
   s.prescribe({s.dof(m.nodes("upper.top").front(), 0), {}, {}});
   b.contact = mortar(m, add_mortar_contact(m, "upper.bottom", "lower.top", "interface"));
   b.system = &s;

@@ -66,8 +66,8 @@ bool measured(const std::string& key) {
 
 // Errors and residuals: at round-off they may move in their last digits.
 bool round_off_figure(const std::string& key) {
-  for (const char* part : {"error", "residual", "gap_violation", "penetration", "change",
-                           "spread", "holding_moments"})
+  for (const char* part :
+       {"error", "residual", "gap_violation", "penetration", "change", "spread", "holding_moments"})
     if (key.find(part) != std::string::npos) return true;
   return false;
 }

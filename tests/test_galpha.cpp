@@ -53,7 +53,6 @@
 #include <string>
 #include <vector>
 
-#include "paper_scenes.hpp"
 #include "core/load.hpp"
 #include "core/mesh.hpp"
 #include "core/particles.hpp"
@@ -63,6 +62,7 @@
 #include "integrators/generalized_alpha.hpp"
 #include "integrators/schemes.hpp"
 #include "integrators/stepper.hpp"
+#include "paper_scenes.hpp"
 #include "pendulum.hpp"
 
 namespace emdae {

@@ -21,8 +21,8 @@
 #include <cmath>
 #include <cstdlib>
 
-#include "paper_scenes.hpp"
 #include "integrators/statics.hpp"
+#include "paper_scenes.hpp"
 
 namespace emdae {
 namespace {

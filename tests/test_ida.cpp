@@ -37,14 +37,14 @@
 #include <string>
 #include <vector>
 
-#include "integrators/schemes.hpp"
-#include "paper_scenes.hpp"
 #include "core/load.hpp"
 #include "core/particles.hpp"
 #include "core/quantities.hpp"
 #include "core/user_term.hpp"
 #include "integrators/driver.hpp"
 #include "integrators/ida_stepper.hpp"
+#include "integrators/schemes.hpp"
+#include "paper_scenes.hpp"
 #include "pendulum.hpp"
 
 namespace emdae {

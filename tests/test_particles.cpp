@@ -11,9 +11,9 @@
 
 #include <cmath>
 
-#include "integrators/schemes.hpp"
 #include "core/quantities.hpp"
 #include "integrators/driver.hpp"
+#include "integrators/schemes.hpp"
 #include "particle_systems.hpp"
 
 namespace emdae {

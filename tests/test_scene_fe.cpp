@@ -17,13 +17,13 @@
 #include <string>
 #include <vector>
 
-#include "integrators/schemes.hpp"
 #include "cli/scene.hpp"
-#include "paper_scenes.hpp"
 #include "core/quantities.hpp"
 #include "integrators/driver.hpp"
+#include "integrators/schemes.hpp"
 #include "integrators/stepper.hpp"
 #include "malformed_scene.hpp"
+#include "paper_scenes.hpp"
 #include "temp_dir.hpp"
 #include "verify/recorder.hpp"
 
@@ -491,8 +491,9 @@ TEST(SceneFe, RecorderSplitsLoadedAndLoadFreeIntervals) {
   State st = initial_state(s);
   Recorder rec(s, st);
   rec.set_load_free_test([&](double a, double b) { return scene->model->loads_vanish(a, b); });
-  const RunOutcome out = integrate(
-      *stepper, st, scene->settings.time, [&](const State& x, const AcceptedStep& a) { rec.observe(x, a); });
+  const RunOutcome out =
+      integrate(*stepper, st, scene->settings.time,
+                [&](const State& x, const AcceptedStep& a) { rec.observe(x, a); });
   ASSERT_TRUE(out.ok) << out.message;
   EXPECT_TRUE(rec.has_external_work());
   EXPECT_GT(rec.last().external_work, 0.0);

@@ -52,8 +52,8 @@ void HistoryWriter::write(const Sample& s) {
     std::fprintf(file_, ",%.17g", q.angular_momentum.norm());
     for (int d = 0; d < 3; ++d) std::fprintf(file_, ",%.17g", q.angular_momentum[d]);
   }
-  std::fprintf(file_, ",%.17g,%d,%d,%.17g,%.17g,%.17g", q.phi_max, s.newton_iterations,
-               s.cutbacks, s.energy_error, s.linear_momentum_error, s.angular_momentum_error);
+  std::fprintf(file_, ",%.17g,%d,%d,%.17g,%.17g,%.17g", q.phi_max, s.newton_iterations, s.cutbacks,
+               s.energy_error, s.linear_momentum_error, s.angular_momentum_error);
   if (contact_)
     std::fprintf(file_, ",%d,%d,%.17g,%.17g", s.active_contacts, s.contact_events, s.gap_violation,
                  s.penetration);

@@ -287,9 +287,12 @@ RunCurves derive_curves(const Table& h) {
   // The residuals on position level, phi_max first; contact's columns.
   for (const char* name : {"phi_max", "gap_violation_max"})
     if (h.column(name)) c.constraint.push_back(series(name, name));
-  if (h.column("active_contacts")) c.contact.push_back(series("active_contacts", "active_contacts"));
-  if (h.column("contact_events")) c.events.push_back(per_step("contact_events", col("contact_events")));
-  if (h.column("penetration_max")) c.penetration.push_back(series("penetration_max", "penetration_max"));
+  if (h.column("active_contacts"))
+    c.contact.push_back(series("active_contacts", "active_contacts"));
+  if (h.column("contact_events"))
+    c.events.push_back(per_step("contact_events", col("contact_events")));
+  if (h.column("penetration_max"))
+    c.penetration.push_back(series("penetration_max", "penetration_max"));
   c.newton = per_step("Newton iterations", col("newton_iterations"));
   const auto* cut = h.column("cutbacks");
   c.cutbacks = per_step("cut-backs", cut ? *cut : zeros_like(n));

@@ -33,7 +33,6 @@ nlohmann::ordered_json optional_number(const std::optional<double>& x) {
   return x ? nlohmann::ordered_json(*x) : nlohmann::ordered_json(nullptr);
 }
 
-
 std::string maybe(const std::optional<double>& x, const std::string& note) {
   return x ? fmt::format("{:.3e}", *x) : note;
 }

@@ -13,8 +13,8 @@
 // the energy and momentum figures of a dynamic run (to_json leaves them out).
 #pragma once
 
-#include <nlohmann/json.hpp>
 #include <iosfwd>
+#include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
 #include <vector>
