@@ -234,7 +234,8 @@ void study(const std::string& name, const std::string& title, const System& s, d
 
 void pendulum_part(bool quick, const std::string& out_dir) {
   const double t_end = 2.0;
-  auto s = test_systems::double_pendulum();
+  const auto model = test_systems::double_pendulum();
+  const System* s = &model->system();
   const Vec q_ref = test_systems::double_pendulum_reference(t_end);
   const double h0 = measure(*s, s->initial_positions(), s->initial_velocities(), 0.0).total();
   const double v_min = 9.81 * (-1.0 - 2.0);
