@@ -29,7 +29,8 @@ void Builder::finish() {
   try {
     model().validate();
   } catch (const ModelError& e) {
-    if (e.key() == "particles") fail(particle_where_.begin()->second, e.key(), e.what());
+    if (e.key() == "particles")
+      fail(particle_where_.at(model().particles().front().name), e.key(), e.what());
     if (e.key().empty()) throw SceneError(loc_.start() + ": " + e.what());
     fail(loc_.start(), e.key(), e.what());
   }

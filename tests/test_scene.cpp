@@ -201,6 +201,12 @@ std::vector<Malformed> malformed_scenes() {
        kTime + "[[particles]]\nname = \"a\"\nposition = [0.0, 0.0]\nfixed = true\n",
        "[[particles]]",
        {"key 'particles'", "every particle is fixed"}},
+      // The place named is the first particle of the file, whatever its name.
+      {"all_fixed_first_declared",
+       kTime + "[[particles]] # z\nname = \"z\"\nposition = [0.0, 0.0]\nfixed = true\n" +
+           "[[particles]]\nname = \"a\"\nposition = [1.0, 0.0]\nfixed = true\n",
+       "[[particles]] # z",
+       {"key 'particles'", "every particle is fixed"}},
       {"coincident_spring",
        kValid + "[[particles]]\nname = \"c\"\nmass = 1.0\nposition = [0.0, 0.0]\n" +
            "[[springs]]\nbetween = [\"a\", \"c\"]\nstiffness = 1.0\n",
