@@ -321,6 +321,7 @@ void Model::prescribe(const std::string& nodes, Components components, bool fixe
 
 void Model::add_torque(const std::string& name, const std::string& on, double torque,
                        const TimeFunction& g) {
+  find_set(on, SetKind::Nodes, "on");
   std::vector<int> list = nodes(on);
   if (list.size() < 2) throw ModelError("on", "a torque needs a set of at least two nodes");
   // make_torque takes T(t) itself: the factor scaled by the magnitude.
