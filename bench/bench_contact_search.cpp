@@ -36,9 +36,9 @@
 
 #include "contact/mortar_contact.hpp"
 #include "contact/search.hpp"
-#include "contact_systems.hpp"
 #include "core/material.hpp"
 #include "core/mesh.hpp"
+#include "core/model.hpp"
 #include "core/system.hpp"
 
 namespace {
@@ -51,7 +51,7 @@ constexpr double kDt = 0.01;
 struct Scene {
   std::string kind;
   int n = 0;
-  std::unique_ptr<System> system;
+  std::unique_ptr<Model> model;
   std::unique_ptr<MortarContact> contact;
   ContactSurface slave, master;
   Vec q, v;
@@ -61,25 +61,25 @@ std::unique_ptr<Scene> make_scene(const std::string& kind, int n) {
   auto sc = std::make_unique<Scene>();
   sc->kind = kind;
   sc->n = n;
-  sc->system = std::make_unique<System>(2);
-  System& s = *sc->system;
+  sc->model = std::make_unique<Model>(2);
+  Model& m = *sc->model;
+  const System& s = m.system();
   const Material mat = make_material(MaterialModel::SaintVenantKirchhoff, 100.0, 0.1, 1e-3);
+  // The surfaces of the model's sets; the contact is the benchmark's own
+  // (not added to the system), so that its search can be timed alone.
+  const auto surface = [&m](const std::string& set) { return ContactSurface{set, m.edges(set)}; };
   if (kind == "strips") {
-    const Mesh lower = rectangle_mesh(Eigen::Vector2d(0, -1), n, 1.0, n, 1);
-    const Mesh upper = rectangle_mesh(Eigen::Vector2d(0.37, kGap), n, 1.0, n, 1);
-    const BodyInfo a = add_body(s, lower, mat);
-    const BodyInfo b = add_body(s, upper, mat);
-    sc->slave = test_systems::surface(upper, "bottom", b.node_offset);
-    sc->master = test_systems::surface(lower, "top", a.node_offset);
+    m.add_body("lower", rectangle_mesh({0, -1}, n, 1.0, n, 1), mat);
+    m.add_body("upper", rectangle_mesh({0.37, kGap}, n, 1.0, n, 1), mat);
+    sc->slave = surface("upper.bottom");
+    sc->master = surface("lower.top");
   } else {
     // Segment length 2 pi r / n = 1 on the outer surface.
     const double r_out = n / (2.0 * M_PI), r_in = r_out - 1.0;
-    const Mesh left = ring_mesh(Eigen::Vector2d(-r_out - kGap / 2, 0), r_in, r_out, n, 1);
-    const Mesh right = ring_mesh(Eigen::Vector2d(r_out + kGap / 2, 0.3), r_in, r_out, n, 1);
-    const BodyInfo a = add_body(s, left, mat);
-    const BodyInfo b = add_body(s, right, mat);
-    sc->slave = test_systems::surface(left, "outer", a.node_offset);
-    sc->master = test_systems::surface(right, "outer", b.node_offset);
+    m.add_body("left", ring_mesh({-r_out - kGap / 2, 0}, r_in, r_out, n, 1), mat);
+    m.add_body("right", ring_mesh({r_out + kGap / 2, 0.3}, r_in, r_out, n, 1), mat);
+    sc->slave = surface("left.outer");
+    sc->master = surface("right.outer");
   }
   sc->contact = std::make_unique<MortarContact>(s, sc->slave, sc->master, kind);
   sc->q = s.initial_positions();

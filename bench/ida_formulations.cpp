@@ -396,7 +396,7 @@ class ReducedRun final : public Run {
 
 struct Case {
   std::string name;
-  std::function<std::unique_ptr<System>()> build;
+  std::function<std::shared_ptr<System>()> build;
   Vec q_ref;  // at t = 1
 };
 
@@ -542,7 +542,12 @@ int main(int argc, char** argv) {
         quick ? std::vector<double>{1e-4, 1e-8} : std::vector<double>{1e-4, 1e-6, 1e-8, 1e-10};
     const std::vector<Case> cases = {
         {"pendulum", test_systems::pendulum, test_systems::pendulum_reference(1.0).q},
-        {"double pendulum", test_systems::double_pendulum,
+        {"double pendulum",
+         [] {
+           // The model keeps its system alive: a pointer to the one, owning the other.
+           std::shared_ptr<Model> model = test_systems::double_pendulum();
+           return std::shared_ptr<System>(model, &model->system());
+         },
          test_systems::double_pendulum_reference(1.0)},
     };
     std::vector<Row> rows;

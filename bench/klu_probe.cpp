@@ -35,12 +35,13 @@
 #include <string>
 #include <vector>
 
-#include "contact_systems.hpp"
 #include "core/material.hpp"
 #include "core/mesh.hpp"
 #include "integrators/driver.hpp"
+#include "integrators/schemes.hpp"
 #include "integrators/statics.hpp"
 #include "integrators/stepper.hpp"
+#include "paper_scenes.hpp"
 
 namespace {
 
@@ -439,10 +440,10 @@ void analyse(const Captured& m, const System& s, const std::string& dump) {
 
 // --- scenes ---------------------------------------------------------------------
 
-RunOutcome run_dynamics(const System& s, State& st, double dt, double t_end,
-                        const SchemeSettings& ss = {},
+RunOutcome run_dynamics(const System& s, State& st, double dt, double t_end, SchemeSettings ss = {},
                         NewtonSettings ns = NewtonSettings{1e-10, 25, false}) {
-  auto stepper = make_stepper("em", s, ns, ss);
+  ss.newton = ns;
+  auto stepper = make_stepper("em", s, ss);
   return integrate(*stepper, st, TimeSettings{dt, t_end, dt / 64},
                    [](const State&, const AcceptedStep&) {});
 }

@@ -21,7 +21,7 @@
 //            Error = max nodal |q - q_ref| at t_end (the ring's radius is
 //            10); energy error = max_t |H(t) - H(0)| / H(0).
 //  impact    the paper's two-ring impact, ring_impact(120, 10, 20, 64, 1, 47,
-//            50) of tests/contact_systems.hpp, t_end = 20, dt = 0.01, with em,
+//            50) of tests/paper_scenes.hpp, t_end = 20, dt = 0.01, with em,
 //            midpoint, galpha, ida and em without impact location: energy,
 //            linear and angular momentum errors, max |gap| of active nodes,
 //            min gap of inactive ones, contact window, Newton iterations, CPU
@@ -55,13 +55,14 @@
 #include <string>
 #include <vector>
 
-#include "contact_systems.hpp"
 #include "core/assembly.hpp"
 #include "core/material.hpp"
 #include "core/mesh.hpp"
 #include "core/quantities.hpp"
 #include "integrators/driver.hpp"
+#include "integrators/schemes.hpp"
 #include "integrators/stepper.hpp"
+#include "paper_scenes.hpp"
 #include "particle_systems.hpp"
 #include "pendulum.hpp"
 
@@ -101,11 +102,10 @@ double max_nodal_distance(const Vec& a, const Vec& b) {
 
 RunResult run(const System& s, const RunSpec& spec, double t_end, double energy_scale,
               const Vec* q_ref) {
-  SchemeSettings ss;
-  ss.rtol = ss.atol = spec.tol;
-  ss.rho_inf = 0.9;
-  NewtonSettings ns;  // tolerance 1e-10 (length), 20 iterations
-  auto stepper = make_stepper(spec.scheme, s, ns, ss);
+  SchemeSettings ss;  // Newton tolerance 1e-10 (length), 20 iterations
+  ss.ida.rtol = ss.ida.atol = spec.tol;
+  ss.galpha = GeneralizedAlphaSettings::chung_hulbert(0.9);
+  auto stepper = make_stepper(spec.scheme, s, ss);
   State st = initial_state(s);
   const double h0 = measure(s, st.q, st.v, 0.0).total();
   RunResult r;
@@ -234,7 +234,8 @@ void study(const std::string& name, const std::string& title, const System& s, d
 
 void pendulum_part(bool quick, const std::string& out_dir) {
   const double t_end = 2.0;
-  auto s = test_systems::double_pendulum();
+  const auto model = test_systems::double_pendulum();
+  const System* s = &model->system();
   const Vec q_ref = test_systems::double_pendulum_reference(t_end);
   const double h0 = measure(*s, s->initial_positions(), s->initial_velocities(), 0.0).total();
   const double v_min = 9.81 * (-1.0 - 2.0);
@@ -316,10 +317,10 @@ ImpactRun impact_run(const std::string& scheme, bool locate, const std::string& 
                      const std::string& out_dir, double dt = 0.01, double ida_tol = 1e-8) {
   const test_systems::RingImpact scene = test_systems::ring_impact(120, 10, 20, 64, 1, 47, 50);
   const System& s = *scene.system;
-  SchemeSettings settings;
-  settings.impact = locate ? ImpactTreatment::Locate : ImpactTreatment::None;
-  settings.rtol = settings.atol = ida_tol;
-  auto stepper = make_stepper(scheme, s, NewtonSettings{1e-11, 25, false}, settings);
+  SchemeSettings settings{NewtonSettings{1e-11, 25, false}};
+  settings.contact.impact = locate ? ImpactTreatment::Locate : ImpactTreatment::None;
+  settings.ida.rtol = settings.ida.atol = ida_tol;
+  auto stepper = make_stepper(scheme, s, settings);
   State st = initial_state(s);
   const Quantities q0 = measure(s, st.q, st.v, 0);
   ImpactRun f;

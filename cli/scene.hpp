@@ -7,8 +7,10 @@
 //   [time]         dt (> 0), t_end (>= dt), min_dt (optional, <= dt); without
 //                  [time], a scene with [statics] is a static analysis
 //   [scheme]       name (see known_schemes(), default "em"), newton_tolerance,
-//                  newton_max_iterations, line_search; rtol, atol (ida);
-//                  rho_inf (galpha); locate_impacts, gap_tolerance (contact)
+//                  newton_max_iterations, line_search; locate_impacts,
+//                  gap_tolerance (contact, shared by the schemes)
+//   [scheme.ida]   rtol, atol, max_order
+//   [scheme.galpha] rho_inf
 //   [[particles]]  name, mass, position, velocity (default 0), fixed (default false)
 //   [[springs]]    between = ["a", "b"], stiffness, rest_length, law ("linear" | "green")
 //   [[links]]      between = ["a", "b"], length: rigid distance constraint
@@ -48,9 +50,14 @@
 //   ring_impact.toml:31:9: key 'bodies[1].material.poisson': must be in (-1, 0.5), received 0.5
 //
 // Unknown keys are errors with a "did you mean" suggestion, so a typo never
-// silently falls back to a default. Each section has its own parse function
-// in scene.cpp, listed in one table there: a new section is one entry and
-// one function.
+// silently falls back to a default.
+//
+// The reader only translates: every section becomes calls on a Model
+// (core/model.hpp; contact/contact_pair.hpp) and fields of RunSettings
+// (run/run.hpp), which compute what the scene implies. Its pieces:
+// toml_fields.hpp (the typed getters that name the place), scene_overrides.cpp
+// (--set), scene_reader.cpp (the table of sections), and one builder file per
+// group of sections (scene_settings.cpp, scene_particles.cpp, scene_bodies.cpp).
 #pragma once
 
 #include <memory>
@@ -59,14 +66,8 @@
 #include <string_view>
 #include <vector>
 
-#include "core/load.hpp"
-#include "core/mesh.hpp"
-#include "core/system.hpp"
-#include "integrators/driver.hpp"
-#include "integrators/newton.hpp"
-#include "integrators/statics.hpp"
-#include "integrators/stepper.hpp"
-#include "verify/summary.hpp"
+#include "core/model.hpp"
+#include "run/run.hpp"
 
 namespace emdae {
 
@@ -75,94 +76,17 @@ class SceneError : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
-struct OutputSettings {
-  int every = 1;  // a history row every `every` accepted steps (and the last)
-  // VTU fields of the bodies every `vtu_every` steps (and the first and last);
-  // -1: automatic (about 100 files over the run), 0: none.
-  long vtu_every = -1;
-};
-
-/// A named particle of the scene and the node it became.
-struct SceneParticle {
-  std::string name;
-  int node = -1;
-  bool fixed = false;
-};
-
-/// An FE body of the scene: where its nodes went and what it is made of.
-struct SceneBody {
-  std::string name;
-  std::string mesh;      // e.g. "ring, 64 x 1 elements, radii 47 .. 50"
-  std::string material;  // Material::describe()
-  int node_offset = 0, n_nodes = 0, n_elements = 0;
-  double mass = 0.0;
-  std::vector<std::string> node_sets, edge_sets;
-  // The reference mesh and the material themselves, for the VTU fields
-  // (verify/vtu.hpp: VtuBody{name, geometry, node_offset, elastic}).
-  Mesh geometry;
-  Material elastic;
-};
-
-/// A contact pair and the size of its surfaces.
-struct SceneContact {
-  std::string name, slave, master;  // "body.set"
-  int slave_segments = 0, master_segments = 0, candidates = 0;
-  // modified_mass = true: both surfaces' nodes are massless, their mass
-  // moved within each body (core/modified_mass.hpp).
-  bool modified_mass = false;
-  double moved_mass = 0.0;
-};
-
-/// A [[dirichlet]] entry, for `emdae check`.
-struct SceneDirichlet {
-  std::string nodes;  // "body.set"
-  int n_nodes = 0, n_dofs = 0;
-  std::string what;  // "fixed (x, y)", "displacement [1, 0] x ramp(0, 1)"
-};
-
-/// A [[loads]] entry: what it is and the time function scaling it.
-struct SceneLoad {
-  std::string name, type, on;  // on: "body.set" or the body
-  std::string magnitude;       // e.g. "torque 10000", "traction [0, -1]"
-  std::string time_function;   // e.g. "hat(0, 0.5, peak 1)"
-  TimeFunction g = TimeFunction::constant(1.0);
-};
-
-/// [statics]: an equilibrium solve before the dynamics, or the whole run of
-/// a static analysis (a scene without [time]).
-struct SceneStatics {
-  bool enabled = false;
-  StaticSettings settings;                      // settings.load_time is always set (default 0)
-  std::vector<std::string> hold_names;          // "body.set"
-  std::vector<std::vector<int>> hold_rotation;  // their system nodes
-};
-
+/// A scene: the model it declares and the settings of its run.
 struct Scene {
-  std::string name, description, source_path;
-  int dimension = 2;
-  std::unique_ptr<System> system;
-  /// No [time], [statics] given: the run is the static solve alone (time is
-  /// then unused).
-  bool static_only = false;
-  TimeSettings time;
-  std::string scheme = "em";
-  NewtonSettings newton;
-  SchemeSettings scheme_settings;
-  OutputSettings output;
-  Tolerances tolerances;
-  std::vector<SceneParticle> particles;
-  std::vector<SceneBody> bodies;
-  std::vector<SceneContact> contacts;
-  std::vector<SceneDirichlet> dirichlet;
-  std::vector<SceneLoad> loads;
-  SceneStatics statics;
+  std::unique_ptr<Model> model;
+  /// Name, source, scheme and the settings of every scheme, time, statics,
+  /// output and tolerances; settings.out_dir is left to the caller.
+  RunSettings settings;
   /// Things that are allowed but probably not meant (with their location).
   std::vector<std::string> warnings;
 
-  /// True when every load's time function is zero on all of [a, b] (exact:
-  /// the time functions are piecewise linear), so that the energy must be
-  /// conserved over a step from a to b. True without loads.
-  bool loads_vanish(double a, double b) const;
+  System& system() { return model->system(); }
+  const System& system() const { return model->system(); }
 };
 
 /// A value set from outside the file: "key=value" and where it came from

@@ -26,6 +26,9 @@ struct ContactOptions {
   /// Search margin in units of the mean master segment length, added to the
   /// distance the surfaces can close within a step (2 max|v| dt).
   double search_margin = 1.0;
+  /// Both surfaces massless, their mass moved within their bodies
+  /// (core/modified_mass.hpp); contact/contact_pair.hpp applies it.
+  bool modified_mass = false;
 };
 
 class MortarContact final : public UnilateralConstraints {

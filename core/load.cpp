@@ -1,5 +1,7 @@
 #include "core/load.hpp"
 
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <stdexcept>
 
@@ -63,6 +65,50 @@ double TimeFunction::integral(double a, double b) const {
   for (std::size_t i = 1; i < pts.size(); ++i)
     sum += 0.5 * (pts[i] - pts[i - 1]) * ((*this)(pts[i - 1]) + (*this)(pts[i]));
   return sum;
+}
+
+double TimeFunction::slope(double t) const {
+  const std::vector<double>& k = times_;
+  if (k.size() < 2 || t < k.front() || t >= k.back()) return 0.0;
+  const auto it = std::upper_bound(k.begin(), k.end(), t);
+  const std::size_t i = static_cast<std::size_t>(it - k.begin());
+  return ((*this)(k[i]) - (*this)(k[i - 1])) / (k[i] - k[i - 1]);
+}
+
+bool TimeFunction::vanishes_on(double a, double b) const {
+  if ((*this)(a) != 0.0 || (*this)(b) != 0.0) return false;
+  for (double t : times_)
+    if (t > a && t < b && (*this)(t) != 0.0) return false;
+  return true;
+}
+
+std::string TimeFunction::describe() const {
+  switch (kind_) {
+    case Kind::Ramp:
+      return fmt::format("ramp({}, {}) to {}", times_[0], times_[1], values_[1]);
+    case Kind::Hat:
+      return fmt::format("hat({}, {}), peak {}", times_[0], times_[2], values_[1]);
+    case Kind::Table:
+      return fmt::format("table of {} points", times_.size());
+    default:
+      return fmt::format("constant {}", values_[0]);
+  }
+}
+
+TimeFunction TimeFunction::scaled(double s) const {
+  switch (kind_) {
+    case Kind::Ramp:
+      return ramp(times_[0], times_[1], s * values_[1]);
+    case Kind::Hat:
+      return hat(times_[0], times_[2], s * values_[1]);
+    case Kind::Table: {
+      std::vector<double> v = values_;
+      for (double& x : v) x *= s;
+      return table(times_, v);
+    }
+    default:
+      return constant(s * values_[0]);
+  }
 }
 
 namespace {

@@ -33,6 +33,15 @@ class TimeFunction {
   double operator()(double t) const;
   /// int_{a}^{b} f(t) dt (exact: f is piecewise linear)
   double integral(double a, double b) const;
+  /// f'(t): the slope of the piece that starts at or before t (the right
+  /// derivative at a kink), 0 outside the kinks.
+  double slope(double t) const;
+  /// True when f is zero on all of [a, b] (exact: f is piecewise linear).
+  bool vanishes_on(double a, double b) const;
+  /// "ramp(0, 1) to 2", "hat(0, 0.5), peak 1", "table of 4 points", "constant 1".
+  std::string describe() const;
+  /// s f, built as the same kind of function with its values scaled.
+  TimeFunction scaled(double s) const;
   /// Times where f has a kink, so a run can put step boundaries there.
   std::vector<double> kinks() const { return times_; }
   Kind kind() const { return kind_; }

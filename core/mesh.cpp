@@ -1,5 +1,7 @@
 #include "core/mesh.hpp"
 
+#include <fmt/format.h>
+
 #include <Eigen/Geometry>
 #include <cmath>
 #include <memory>
@@ -125,6 +127,8 @@ Mesh ring_mesh(const Eigen::Vector2d& centre, double inner_radius, double outer_
     inner_edges.push_back({node(0, i + 1), node(0, i)});
     outer_edges.push_back({node(n_through, i), node(n_through, i + 1)});
   }
+  m.description = fmt::format("ring, {} x {} elements, radii {} .. {} about ({}, {})", n_around,
+                              n_through, inner_radius, outer_radius, centre.x(), centre.y());
   return m;
 }
 
@@ -159,6 +163,8 @@ Mesh rectangle_mesh(const Eigen::Vector2d& origin, double width, double height, 
     m.edge_sets["right"].push_back({node(nx, j), node(nx, j + 1)});
     m.edge_sets["left"].push_back({node(0, j + 1), node(0, j)});
   }
+  m.description = fmt::format("rectangle, {} x {} elements, {} x {} from ({}, {})", nx, ny, width,
+                              height, origin.x(), origin.y());
   return m;
 }
 
@@ -184,6 +190,8 @@ void grade_mesh(Mesh& mesh, const Eigen::Vector2d& lo, const Eigen::Vector2d& hi
       if (power[d] == 1.0 || r == 0.0 || !(length > 0)) continue;
       x[d] = centre[d] + r * std::pow(std::abs(r) / length, power[d] - 1.0);
     }
+  mesh.description += fmt::format(", graded (powers {}, {}) towards ({}, {})", power[0], power[1],
+                                  centre.x(), centre.y());
 }
 
 BodyInfo add_body(System& system, const Mesh& mesh, const Material& material,

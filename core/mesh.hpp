@@ -31,6 +31,9 @@ struct Mesh {
   /// Named boundary-edge sets with the same names; each edge (a, b) is
   /// oriented with the body on its left.
   std::map<std::string, std::vector<std::array<int, 2>>> edge_sets;
+  /// How the mesh was made, for messages and reports: "ring, 64 x 1
+  /// elements, radii 47 .. 50 about (0, 0)" (set by the generators).
+  std::string description;
 
   int n_nodes() const { return static_cast<int>(nodes.size()); }
   int n_elements() const { return static_cast<int>(quads.size()); }

@@ -44,8 +44,8 @@ struct ModifiedMass {
 /// are massless already are left alone. Throws std::invalid_argument when a
 /// recipient is also in `nodes`, when there are fewer than three recipients
 /// not on one line, or when the correction would leave a recipient without
-/// positive mass.
+/// positive mass; then, and with apply = false, the system is unchanged.
 ModifiedMass modify_mass(System& system, const std::vector<int>& nodes,
-                         const std::vector<int>& recipients);
+                         const std::vector<int>& recipients, bool apply = true);
 
 }  // namespace emdae

@@ -31,6 +31,7 @@
 #include "core/quantities.hpp"
 #include "core/user_term.hpp"
 #include "integrators/driver.hpp"
+#include "integrators/schemes.hpp"
 
 using namespace emdae;
 
@@ -52,7 +53,7 @@ struct Figures {
 };
 
 Figures run(const System& s, const char* scheme, double dt, double t_end) {
-  auto stepper = make_stepper(scheme, s, NewtonSettings{1e-12, 20, false});
+  auto stepper = make_stepper(scheme, s, {NewtonSettings{1e-12, 20, false}});
   State st = initial_state(s);
   const double e0 = measure(s, st.q, st.v, 0.0).total();
   Figures f{e0, e0, 0.0, 0.0, true};

@@ -29,8 +29,11 @@ void release_candidate(State& s, std::size_t k) {
   deactivate_candidate(s, static_cast<int>(n_static), k);
 }
 
-ActiveSet::ActiveSet(const System& system, double gap_tolerance)
-    : system_(system), tol_(gap_tolerance), n_static_(system.n_constraints()) {
+ActiveSet::ActiveSet(const System& system, double gap_tolerance, bool persistency)
+    : system_(system),
+      tol_(gap_tolerance),
+      persistency_(persistency),
+      n_static_(system.n_constraints()) {
   if (!(gap_tolerance > 0.0) || !std::isfinite(gap_tolerance))
     throw std::invalid_argument("ActiveSet: the gap tolerance must be positive, received " +
                                 std::to_string(gap_tolerance));
@@ -102,7 +105,8 @@ ActiveSet::Targets ActiveSet::targets(const State& s) const {
     const double g = gap(s.active[k], s.q);
     const bool closed = std::abs(g) <= tol_;
     t.closed[static_cast<Eigen::Index>(k)] = closed ? 1.0 : 0.0;
-    t.gap[static_cast<Eigen::Index>(k)] = closed && !algebraic(s.active[k]) ? g : 0.0;
+    t.gap[static_cast<Eigen::Index>(k)] =
+        persistency_ && closed && !algebraic(s.active[k]) ? g : 0.0;
   }
   return t;
 }

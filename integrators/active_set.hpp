@@ -50,7 +50,9 @@ Transitions transitions(const std::vector<int>& before, const std::vector<int>& 
 class ActiveSet {
  public:
   /// @param gap_tolerance  > 0: the band [-tol, tol] in which a gap counts as closed.
-  ActiveSet(const System& system, double gap_tolerance);
+  /// @param persistency    targets keep a closed node's gap (dynamics); false:
+  ///                       every target is 0 (statics, which has no energy balance).
+  ActiveSet(const System& system, double gap_tolerance, bool persistency = true);
 
   double gap_tolerance() const { return tol_; }
   const System& system() const { return system_; }
@@ -98,6 +100,7 @@ class ActiveSet {
  private:
   const System& system_;
   double tol_;
+  bool persistency_;
   int n_static_;
 };
 

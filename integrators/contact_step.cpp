@@ -114,8 +114,9 @@ struct ContactStepper::Point {
   Vec gaps, rates;
 };
 
-ContactStepper::ContactStepper(const System& system, double gap_tolerance, ImpactTreatment impact)
-    : system_(system), set_(system, gap_tolerance), impact_(impact) {}
+ContactStepper::ContactStepper(const System& system, double gap_tolerance, ImpactTreatment impact,
+                               bool persistency)
+    : system_(system), set_(system, gap_tolerance, persistency), impact_(impact) {}
 
 ContactStepper::Point ContactStepper::point(double tau, const State& state,
                                             const std::vector<int>& ids) const {

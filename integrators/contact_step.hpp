@@ -73,7 +73,9 @@ struct ImpactCounters {
 
 class ContactStepper {
  public:
-  ContactStepper(const System& system, double gap_tolerance, ImpactTreatment impact);
+  /// @param persistency  see ActiveSet (false for statics)
+  ContactStepper(const System& system, double gap_tolerance, ImpactTreatment impact,
+                 bool persistency = true);
 
   /// One step of length dt from `state` (whose contact search is prepared);
   /// on failure `state` is unchanged.

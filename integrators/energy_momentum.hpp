@@ -10,7 +10,8 @@ namespace emdae {
 
 class EnergyMomentumStepper final : public MidpointFamilyStepper {
  public:
-  EnergyMomentumStepper(const System& system, NewtonSettings newton, SchemeSettings scheme = {})
+  EnergyMomentumStepper(const System& system, NewtonSettings newton,
+                        MidpointFamilySettings scheme = {})
       : MidpointFamilyStepper(system, GradientKind::Discrete, newton, scheme) {}
   std::string name() const override { return "em"; }
 };

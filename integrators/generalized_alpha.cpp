@@ -36,6 +36,7 @@ GeneralizedAlphaSettings GeneralizedAlphaSettings::chung_hulbert(double rho_inf)
   p.alpha_f = rho_inf / (rho_inf + 1);
   p.gamma = 0.5 - p.alpha_m + p.alpha_f;
   p.beta = 0.25 * std::pow(1 - p.alpha_m + p.alpha_f, 2);
+  p.rho_inf = rho_inf;
   return p;
 }
 
@@ -46,6 +47,7 @@ GeneralizedAlphaSettings GeneralizedAlphaSettings::hht(double rho_inf) {
   p.alpha_f = (1 - rho_inf) / (1 + rho_inf);
   p.gamma = 0.5 + p.alpha_f;
   p.beta = 0.25 * std::pow(1 + p.alpha_f, 2);
+  p.rho_inf = rho_inf;
   return p;
 }
 
@@ -54,6 +56,7 @@ GeneralizedAlphaSettings GeneralizedAlphaSettings::newmark(double beta, double g
   p.alpha_m = p.alpha_f = 0.0;
   p.beta = beta;
   p.gamma = gamma;
+  p.rho_inf = std::numeric_limits<double>::quiet_NaN();
   p.validate();
   return p;
 }

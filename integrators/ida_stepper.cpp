@@ -21,64 +21,27 @@
 #include "core/gradient.hpp"
 #include "core/quantities.hpp"
 #include "integrators/klu_solver.hpp"
+#include "integrators/sundials_support.hpp"
 
 namespace emdae {
 
 namespace {
 
-// --- SUNDIALS error vocabulary ---------------------------------------------
+// --- SUNDIALS: owners and checks (integrators/sundials_support.hpp) ---------
 
-void check(int flag, const char* call) {
-  if (flag < 0)
-    throw std::runtime_error(std::string(call) + " failed with flag " + std::to_string(flag));
-}
-
-// For IDA's own calls: the flag's name as well.
+using sundials::check;
+using sundials::check_ptr;
+// IDA's own calls name their flag; so do those of its linear-solver interface.
 void check_ida(int flag, const char* call) {
-  if (flag < 0) {
-    char* name = IDAGetReturnFlagName(flag);
-    const std::string what = std::string(call) + " failed: " + (name ? name : "unknown flag") +
-                             " (" + std::to_string(flag) + ")";
-    std::free(name);
-    throw std::runtime_error(what);
-  }
+  check(flag, call, IDAGetReturnFlagName);
 }
-
-// For IDA's linear-solver interface (IDALS_* flags).
 void check_ls(int flag, const char* call) {
-  if (flag < 0) {
-    char* name = IDAGetLinReturnFlagName(flag);
-    const std::string what = std::string(call) + " failed: " + (name ? name : "unknown flag") +
-                             " (" + std::to_string(flag) + ")";
-    std::free(name);
-    throw std::runtime_error(what);
-  }
+  check(flag, call, IDAGetLinReturnFlagName);
 }
-
-template <class T>
-T check_ptr(T p, const char* call) {
-  if (!p) throw std::runtime_error(std::string(call) + " returned NULL");
-  return p;
-}
-
-// --- move-only owners of the SUNDIALS objects ------------------------------
-
-struct ContextFree {
-  void operator()(SUNContext c) const { SUNContext_Free(&c); }
-};
-struct VectorFree {
-  void operator()(N_Vector v) const { N_VDestroy(v); }
-};
-struct MatrixFree {
-  void operator()(SUNMatrix a) const { SUNMatDestroy(a); }
-};
-struct IdaFree {
-  void operator()(void* mem) const { IDAFree(&mem); }
-};
-using ContextPtr = std::unique_ptr<std::remove_pointer_t<SUNContext>, ContextFree>;
-using VectorPtr = std::unique_ptr<std::remove_pointer_t<N_Vector>, VectorFree>;
-using MatrixPtr = std::unique_ptr<std::remove_pointer_t<SUNMatrix>, MatrixFree>;
-using IdaPtr = std::unique_ptr<void, IdaFree>;
+using ContextPtr = sundials::Context;
+using VectorPtr = sundials::Vector;
+using MatrixPtr = sundials::Matrix;
+using IdaPtr = sundials::Memory<IDAFree>;
 
 Eigen::Map<Vec> view(N_Vector v) {
   return {N_VGetArrayPointer(v), N_VGetLength(v)};
@@ -539,11 +502,7 @@ struct IdaStepper::Impl {
     iters_before = iters();
   }
 
-  void create_context() {
-    SUNContext c = nullptr;
-    check(SUNContext_Create(nullptr, &c), "SUNContext_Create");
-    ctx.reset(c);
-  }
+  void create_context() { ctx = sundials::make_context(); }
 
   // (Re)allocates everything whose size is that of the DAE (2n + 2m) for the
   // current active set; y0 = (q, v, lambda, mu) gives the Jacobian's pattern.
@@ -554,8 +513,7 @@ struct IdaStepper::Impl {
     jmat.reset();
     m = m_sys + static_cast<int>(active.size());
     size = 2 * n + 2 * m;
-    for (VectorPtr* p : {&yy, &yp, &id, &yq, &ypq})
-      p->reset(check_ptr(N_VNew_Serial(size, ctx.get()), "N_VNew_Serial"));
+    for (VectorPtr* p : {&yy, &yp, &id, &yq, &ypq}) *p = sundials::make_vector(size, ctx.get());
     // Differential: free q and v. Algebraic (no error test): lambda, mu and
     // the prescribed q_i, v_i.
     auto ids = view(id.get());

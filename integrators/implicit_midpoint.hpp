@@ -11,7 +11,8 @@ namespace emdae {
 
 class ImplicitMidpointStepper final : public MidpointFamilyStepper {
  public:
-  ImplicitMidpointStepper(const System& system, NewtonSettings newton, SchemeSettings scheme = {})
+  ImplicitMidpointStepper(const System& system, NewtonSettings newton,
+                          MidpointFamilySettings scheme = {})
       : MidpointFamilyStepper(system, GradientKind::Midpoint, newton, scheme) {}
   std::string name() const override { return "midpoint"; }
 };

@@ -13,13 +13,13 @@
 namespace emdae {
 
 MidpointFamilyStepper::MidpointFamilyStepper(const System& system, GradientKind kind,
-                                             NewtonSettings newton, SchemeSettings scheme)
+                                             NewtonSettings newton, MidpointFamilySettings scheme)
     : system_(system),
       kind_(kind),
       newton_(newton),
       scheme_(scheme),
       contact_(system, scheme.gap_tolerance > 0 ? scheme.gap_tolerance : newton.tolerance,
-               scheme.impact) {
+               scheme.impact, !scheme.stiffness_scaled_residual) {
   system_.validate();
   const int n = system_.n_dofs();
   {

@@ -55,7 +55,7 @@ namespace emdae {
 class MidpointFamilyStepper : public Stepper, public SubstepScheme {
  public:
   MidpointFamilyStepper(const System& system, GradientKind kind, NewtonSettings newton,
-                        SchemeSettings scheme);
+                        MidpointFamilySettings scheme);
   StepStats step(State& state, double dt) override;
 
   KluSolver::Counters klu_counters() const { return newton_.klu_counters(); }
@@ -72,7 +72,7 @@ class MidpointFamilyStepper : public Stepper, public SubstepScheme {
   const System& system_;
   GradientKind kind_;
   NewtonSolver newton_;
-  SchemeSettings scheme_;
+  MidpointFamilySettings scheme_;
   ContactStepper contact_;
   Vec stiffness_diag_;       // |K_ii| at the initial configuration, if scaling by it
   Vec full_stiffness_diag_;  // |K_ii| at the initial configuration

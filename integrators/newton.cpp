@@ -11,20 +11,14 @@
 #include <stdexcept>
 #include <string>
 
+#include "integrators/sundials_support.hpp"
+
 namespace emdae {
 
 namespace {
 
-void check(int flag, const char* call) {
-  if (flag < 0)
-    throw std::runtime_error(std::string(call) + " failed with flag " + std::to_string(flag));
-}
-
-template <class T>
-T* check_ptr(T* p, const char* call) {
-  if (!p) throw std::runtime_error(std::string(call) + " returned NULL");
-  return p;
-}
+using sundials::check;
+using sundials::check_ptr;
 
 // A scaled Newton step this small is at the round-off level of O(1) unknowns.
 constexpr double kRoundOffStep = 1e-15;
@@ -37,11 +31,12 @@ KluSolver::Counters sum(const KluSolver::Counters& a, const KluSolver::Counters&
 }  // namespace
 
 struct NewtonSolver::Impl {
-  SUNContext ctx = nullptr;
-  N_Vector u = nullptr, uscale = nullptr, fscale = nullptr;
-  SUNMatrix jmat = nullptr;
+  // Declared in the order of their dependence: freed the other way round.
+  sundials::Context ctx = sundials::make_context();
+  sundials::Vector u, uscale, fscale;
+  sundials::Matrix jmat;
   std::unique_ptr<KluSolver> klu;
-  void* kin = nullptr;
+  sundials::Memory<KINFree> kin;
   int n = -1;
 
   // Per-solve state reachable from the callbacks.
@@ -53,23 +48,14 @@ struct NewtonSolver::Impl {
   SparseMatrix jac;
   KluSolver::Counters before;  // of the solvers released since
 
-  Impl() { check(SUNContext_Create(nullptr, &ctx), "SUNContext_Create"); }
-  ~Impl() {
-    release();
-    if (ctx) SUNContext_Free(&ctx);
-  }
+  ~Impl() { release(); }
 
   void release() {
-    if (kin) KINFree(&kin);
+    kin.reset();
     if (klu) before = sum(before, klu->counters());
     klu.reset();
-    if (jmat) SUNMatDestroy(jmat);
-    for (N_Vector* v : {&u, &uscale, &fscale})
-      if (*v) {
-        N_VDestroy(*v);
-        *v = nullptr;
-      }
-    jmat = nullptr;
+    jmat.reset();
+    for (sundials::Vector* v : {&u, &uscale, &fscale}) v->reset();
     n = -1;
   }
 
@@ -77,34 +63,34 @@ struct NewtonSolver::Impl {
     if (size == n) return;
     release();
     n = size;
-    u = check_ptr(N_VNew_Serial(n, ctx), "N_VNew_Serial");
-    uscale = check_ptr(N_VNew_Serial(n, ctx), "N_VNew_Serial");
-    fscale = check_ptr(N_VNew_Serial(n, ctx), "N_VNew_Serial");
-    N_VConst(1.0, uscale);
-    jmat = check_ptr(SUNSparseMatrix(n, n, std::max(1, n), CSC_MAT, ctx), "SUNSparseMatrix");
+    for (sundials::Vector* v : {&u, &uscale, &fscale}) *v = sundials::make_vector(n, ctx.get());
+    N_VConst(1.0, uscale.get());
+    jmat.reset(
+        check_ptr(SUNSparseMatrix(n, n, std::max(1, n), CSC_MAT, ctx.get()), "SUNSparseMatrix"));
     // AMD: our Jacobians are structurally symmetric (FE stiffness, constraint
     // blocks G and G^T), where AMD orders with far less fill than KLU's
     // default COLAMD (measured on the bearing: see docs/performance.md). The
     // solver keeps its analysis across KINSol calls while the pattern holds.
-    klu = std::make_unique<KluSolver>(ctx, KluSolver::Ordering::Amd, KluSolver::Pivoting::Kept);
-    kin = check_ptr(KINCreate(ctx), "KINCreate");
-    check(KINInit(kin, &Impl::residual_cb, u), "KINInit");
-    check(KINSetUserData(kin, this), "KINSetUserData");
-    check(KINSetLinearSolver(kin, klu->get(), jmat), "KINSetLinearSolver");
-    check(KINSetJacFn(kin, &Impl::jacobian_cb), "KINSetJacFn");
+    klu =
+        std::make_unique<KluSolver>(ctx.get(), KluSolver::Ordering::Amd, KluSolver::Pivoting::Kept);
+    kin.reset(check_ptr(KINCreate(ctx.get()), "KINCreate"));
+    check(KINInit(kin.get(), &Impl::residual_cb, u.get()), "KINInit");
+    check(KINSetUserData(kin.get(), this), "KINSetUserData");
+    check(KINSetLinearSolver(kin.get(), klu->get(), jmat.get()), "KINSetLinearSolver");
+    check(KINSetJacFn(kin.get(), &Impl::jacobian_cb), "KINSetJacFn");
     // Exact Newton: a fresh Jacobian at every iteration.
-    check(KINSetMaxSetupCalls(kin, 1), "KINSetMaxSetupCalls");
-    check(KINSetNumMaxIters(kin, s.max_iterations), "KINSetNumMaxIters");
+    check(KINSetMaxSetupCalls(kin.get(), 1), "KINSetMaxSetupCalls");
+    check(KINSetNumMaxIters(kin.get(), s.max_iterations), "KINSetNumMaxIters");
     // A step stalled at round-off ends the iteration; the result is then
     // accepted if its residual meets `tolerance` (a tolerance below the
     // round-off of the residual would otherwise never be met).
-    check(KINSetFuncNormTol(kin, s.tolerance), "KINSetFuncNormTol");
-    check(KINSetScaledStepTol(kin, kRoundOffStep), "KINSetScaledStepTol");
-    check(KINSetMaxNewtonStep(kin, 1e100), "KINSetMaxNewtonStep");
-    check(KINSetErrHandlerFn(kin, &Impl::error_cb, this), "KINSetErrHandlerFn");
+    check(KINSetFuncNormTol(kin.get(), s.tolerance), "KINSetFuncNormTol");
+    check(KINSetScaledStepTol(kin.get(), kRoundOffStep), "KINSetScaledStepTol");
+    check(KINSetMaxNewtonStep(kin.get(), 1e100), "KINSetMaxNewtonStep");
+    check(KINSetErrHandlerFn(kin.get(), &Impl::error_cb, this), "KINSetErrHandlerFn");
     // EMDAE_KINSOL_PRINT=1|2|3 shows KINSOL's own iteration log (on stdout).
     const char* print = std::getenv("EMDAE_KINSOL_PRINT");
-    check(KINSetPrintLevel(kin, print ? std::atoi(print) : 0), "KINSetPrintLevel");
+    check(KINSetPrintLevel(kin.get(), print ? std::atoi(print) : 0), "KINSetPrintLevel");
   }
 
   static void error_cb(int, const char* module, const char* function, char* msg, void* data) {
@@ -170,17 +156,17 @@ NewtonResult NewtonSolver::solve(NewtonProblem& problem, Vec& x, const Vec& resi
   m.last_message.clear();
   m.scale = residual_scale;
   m.last_residual = 0.0;
-  Eigen::Map<Vec>(N_VGetArrayPointer(m.u), n) = x;
-  Eigen::Map<Vec>(N_VGetArrayPointer(m.fscale), n) = residual_scale;
+  Eigen::Map<Vec>(N_VGetArrayPointer(m.u.get()), n) = x;
+  Eigen::Map<Vec>(N_VGetArrayPointer(m.fscale.get()), n) = residual_scale;
 
   const int strategy = settings_.line_search ? KIN_LINESEARCH : KIN_NONE;
-  int flag = KINSol(m.kin, m.u, strategy, m.uscale, m.fscale);
+  int flag = KINSol(m.kin.get(), m.u.get(), strategy, m.uscale.get(), m.fscale.get());
   if (m.error) {
     m.problem = nullptr;
     std::rethrow_exception(m.error);
   }
   long iters = 0;
-  KINGetNumNonlinSolvIters(m.kin, &iters);
+  KINGetNumNonlinSolvIters(m.kin.get(), &iters);
 
   // Converged on the tolerance: go on, one iteration at a time, while the
   // residual still leaves more energy in the step than energy_tolerance and
@@ -188,21 +174,21 @@ NewtonResult NewtonSolver::solve(NewtonProblem& problem, Vec& x, const Vec& resi
   if ((flag == KIN_SUCCESS || flag == KIN_INITIAL_GUESS_OK) && settings_.energy_tolerance > 0) {
     long extra = 0;
     while (iters + extra < settings_.max_iterations) {
-      const Vec xu = Eigen::Map<const Vec>(N_VGetArrayPointer(m.u), n);
+      const Vec xu = Eigen::Map<const Vec>(N_VGetArrayPointer(m.u.get()), n);
       if (xu != m.x) problem.residual(xu, m.f);  // the last evaluation was elsewhere
       if (problem.energy_residual(xu, m.f) <= settings_.energy_tolerance) break;
       const double residual_before = (m.f.array() * m.scale.array()).abs().maxCoeff();
-      check(KINSetFuncNormTol(m.kin, 1e-300), "KINSetFuncNormTol");
-      check(KINSetNumMaxIters(m.kin, 1), "KINSetNumMaxIters");
-      const int more = KINSol(m.kin, m.u, strategy, m.uscale, m.fscale);
+      check(KINSetFuncNormTol(m.kin.get(), 1e-300), "KINSetFuncNormTol");
+      check(KINSetNumMaxIters(m.kin.get(), 1), "KINSetNumMaxIters");
+      const int more = KINSol(m.kin.get(), m.u.get(), strategy, m.uscale.get(), m.fscale.get());
       long it = 0;
-      KINGetNumNonlinSolvIters(m.kin, &it);
+      KINGetNumNonlinSolvIters(m.kin.get(), &it);
       extra += it;
       if (m.error || more < 0 || it == 0) break;
       // An iteration at round-off may make the residual a little worse:
       // keep the better iterate then, and stop.
       if (m.last_residual > std::max(residual_before, settings_.tolerance)) {
-        Eigen::Map<Vec>(N_VGetArrayPointer(m.u), n) = xu;
+        Eigen::Map<Vec>(N_VGetArrayPointer(m.u.get()), n) = xu;
         problem.residual(xu, m.f);
         m.x = xu;
         m.last_residual = residual_before;
@@ -210,8 +196,8 @@ NewtonResult NewtonSolver::solve(NewtonProblem& problem, Vec& x, const Vec& resi
       }
       if (more == KIN_STEP_LT_STPTOL) break;  // round-off: nothing left to gain
     }
-    check(KINSetFuncNormTol(m.kin, settings_.tolerance), "KINSetFuncNormTol");
-    check(KINSetNumMaxIters(m.kin, settings_.max_iterations), "KINSetNumMaxIters");
+    check(KINSetFuncNormTol(m.kin.get(), settings_.tolerance), "KINSetFuncNormTol");
+    check(KINSetNumMaxIters(m.kin.get(), settings_.max_iterations), "KINSetNumMaxIters");
     if (m.error) {
       m.problem = nullptr;
       std::rethrow_exception(m.error);
@@ -219,7 +205,7 @@ NewtonResult NewtonSolver::solve(NewtonProblem& problem, Vec& x, const Vec& resi
     iters += extra;
   }
   m.problem = nullptr;
-  x = Eigen::Map<const Vec>(N_VGetArrayPointer(m.u), n);
+  x = Eigen::Map<const Vec>(N_VGetArrayPointer(m.u.get()), n);
 
   NewtonResult r;
   r.iterations = static_cast<int>(iters);

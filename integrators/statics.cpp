@@ -100,7 +100,7 @@ namespace {
 
 class PseudoTransientStepper final : public MidpointFamilyStepper {
  public:
-  PseudoTransientStepper(const System& system, NewtonSettings newton, SchemeSettings scheme)
+  PseudoTransientStepper(const System& system, NewtonSettings newton, MidpointFamilySettings scheme)
       : MidpointFamilyStepper(system, GradientKind::Exact, newton, scheme) {}
   std::string name() const override { return "pseudo-transient"; }
 };
@@ -108,7 +108,7 @@ class PseudoTransientStepper final : public MidpointFamilyStepper {
 }  // namespace
 
 StaticResult solve_static_held(const System& system, State& state, const StaticSettings& settings) {
-  SchemeSettings scheme;
+  MidpointFamilySettings scheme;
   scheme.impact = ImpactTreatment::None;  // an initial overlap is pushed apart, not "hit"
   scheme.stiffness_scaled_residual = true;
   // Forces at the end of each pseudo step (implicit, dissipative): with the

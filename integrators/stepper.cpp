@@ -6,6 +6,7 @@
 #include "integrators/generalized_alpha.hpp"
 #include "integrators/ida_stepper.hpp"
 #include "integrators/implicit_midpoint.hpp"
+#include "integrators/schemes.hpp"
 
 namespace emdae {
 
@@ -41,21 +42,22 @@ std::vector<std::string> known_schemes() {
 }
 
 std::unique_ptr<Stepper> make_stepper(const std::string& name, const System& system,
-                                      const NewtonSettings& newton, const SchemeSettings& scheme) {
-  if (name == "em") return std::make_unique<EnergyMomentumStepper>(system, newton, scheme);
-  if (name == "midpoint") return std::make_unique<ImplicitMidpointStepper>(system, newton, scheme);
+                                      const SchemeSettings& settings) {
+  MidpointFamilySettings midpoint;
+  static_cast<ContactSettings&>(midpoint) = settings.contact;
+  if (name == "em")
+    return std::make_unique<EnergyMomentumStepper>(system, settings.newton, midpoint);
+  if (name == "midpoint")
+    return std::make_unique<ImplicitMidpointStepper>(system, settings.newton, midpoint);
   if (name == "ida") {
-    IdaSettings ida;
-    ida.rtol = scheme.rtol;
-    ida.atol = scheme.atol;
-    ida.max_order = scheme.max_order;
-    ida.gap_tolerance = scheme.gap_tolerance;
+    IdaSettings ida = settings.ida;
+    ida.gap_tolerance = settings.contact.gap_tolerance;
     return std::make_unique<IdaStepper>(system, ida);
   }
   if (name == "galpha") {
-    GeneralizedAlphaSettings galpha = GeneralizedAlphaSettings::chung_hulbert(scheme.rho_inf);
-    galpha.gap_tolerance = scheme.gap_tolerance;
-    return std::make_unique<GeneralizedAlphaStepper>(system, galpha, newton);
+    GeneralizedAlphaSettings galpha = settings.galpha;
+    galpha.gap_tolerance = settings.contact.gap_tolerance;
+    return std::make_unique<GeneralizedAlphaStepper>(system, galpha, settings.newton);
   }
   std::string known;
   for (const auto& k : known_schemes()) known += (known.empty() ? "" : ", ") + k;

@@ -65,34 +65,28 @@ class Stepper {
   virtual StepStats step(State& state, double dt) = 0;
 };
 
-/// Names accepted by make_stepper, in the order shown to users.
-std::vector<std::string> known_schemes();
-
 /// What em and midpoint do when a node hits (integrators/contact_step.hpp);
 /// generalized-alpha and IDA make every node impact inelastic.
 enum class ImpactTreatment { Locate, VelocityUpdate, None };
 
-/// Settings of the schemes that have their own: IDA's local error tolerances
-/// (on q and v), generalized-alpha's spectral radius at infinity.
-struct SchemeSettings {
-  double rtol = 1e-8, atol = 1e-8;  // "ida"
-  int max_order = 5;                // "ida": highest BDF order, 1..5
-  double rho_inf = 1.0;             // "galpha", in [0, 1]
-  // Contact: what em and midpoint do at an impact (locate it, or correct
-  // the velocities, or neither), and the gap within which a candidate counts
-  // as closed (0: the Newton tolerance for "em"/"midpoint", 10 times it for
-  // "galpha", 10 atol for "ida"). A node may enter with a gap up to this.
+/// How a stepper meets contact, shared by em, midpoint and galpha; ida uses
+/// the gap tolerance.
+struct ContactSettings {
+  // What em and midpoint do at an impact: locate it (and end a sub-step
+  // there, so that a node enters with a closed gap), correct the
+  // velocities, or neither.
   ImpactTreatment impact = ImpactTreatment::Locate;
+  // The gap within which a candidate counts as closed (0: the Newton
+  // tolerance for em and midpoint, 10 times it for galpha, 10 atol for ida).
+  // A node may enter with a gap up to this.
   double gap_tolerance = 0.0;
+};
+
+/// Settings of the midpoint family: em and midpoint (and the static solve).
+struct MidpointFamilySettings : ContactSettings {
   // Scale residuals by the Newton matrix's diagonal (statics) instead of the
   // inertial dt^2 / (2 m_i) (dynamics); see midpoint_family.hpp.
   bool stiffness_scaled_residual = false;
 };
-
-/// Builds the stepper called `name` for `system`; throws std::invalid_argument
-/// naming the known schemes when `name` is not one of them.
-std::unique_ptr<Stepper> make_stepper(const std::string& name, const System& system,
-                                      const NewtonSettings& newton,
-                                      const SchemeSettings& scheme = {});
 
 }  // namespace emdae

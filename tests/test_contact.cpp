@@ -14,10 +14,12 @@
 
 #include "contact/jet.hpp"
 #include "contact/mortar.hpp"
-#include "contact_systems.hpp"
 #include "core/gradient.hpp"
 #include "core/quantities.hpp"
 #include "integrators/driver.hpp"
+#include "integrators/schemes.hpp"
+#include "paper_scenes.hpp"
+#include "run/run.hpp"
 
 namespace emdae {
 namespace {
@@ -116,79 +118,56 @@ TEST(MortarGapTerm, InvariantUnderRigidMotion) {
   }
 }
 
-struct ImpactFigures {
-  bool ok = false;
-  double energy_err = 0, lin_err = 0, ang_err = 0, active_gap = 0, min_inactive_gap = 1e300;
-  int max_active = 0;
-  double first_contact = -1, last_contact = -1;
-  std::string message;
-};
+// A run of the scene through the library; its summary holds the figures.
+Summary run_impact(const RingImpact& scene, const char* scheme, double dt, double t_end,
+                   bool locate) {
+  RunSettings settings;
+  settings.scheme = scheme;
+  settings.schemes.newton = NewtonSettings{1e-11, 25, false};
+  settings.schemes.contact.impact = locate ? ImpactTreatment::Locate : ImpactTreatment::None;
+  settings.time = TimeSettings{dt, t_end, dt / 64};
+  return run(*scene.model, settings).summary;
+}
 
-ImpactFigures run_impact(const RingImpact& scene, const char* scheme, double dt, double t_end,
-                         bool locate) {
-  const System& s = *scene.system;
-  SchemeSettings settings;
-  settings.impact = locate ? ImpactTreatment::Locate : ImpactTreatment::None;
-  auto stepper = make_stepper(scheme, s, NewtonSettings{1e-11, 25, false}, settings);
-  State st = initial_state(s);
-  const Quantities q0 = measure(s, st.q, st.v, 0);
-  ImpactFigures f;
-  const RunOutcome out = integrate(
-      *stepper, st, TimeSettings{dt, t_end, dt / 64}, [&](const State& x, const AcceptedStep&) {
-        const Quantities q = measure(s, x.q, x.v, x.t);
-        f.energy_err = std::max(f.energy_err, std::abs(q.total() - q0.total()) / q0.total());
-        f.lin_err = std::max(f.lin_err, (q.linear_momentum - q0.linear_momentum).norm() /
-                                            std::max(1.0, q0.linear_momentum.norm()));
-        f.ang_err = std::max(f.ang_err, (q.angular_momentum - q0.angular_momentum).norm() /
-                                            q0.angular_momentum.norm());
-        for (int id : x.active)
-          f.active_gap = std::max(f.active_gap, std::abs(s.unilateral_gap(id, x.q)));
-        for (int id = 0; id < s.n_unilateral(); ++id)
-          if (std::find(x.active.begin(), x.active.end(), id) == x.active.end())
-            f.min_inactive_gap = std::min(f.min_inactive_gap, s.unilateral_gap(id, x.q));
-        f.max_active = std::max(f.max_active, static_cast<int>(x.active.size()));
-        if (!x.active.empty()) {
-          if (f.first_contact < 0) f.first_contact = x.t;
-          f.last_contact = x.t;
-        }
-      });
-  f.ok = out.ok;
-  f.message = out.message;
-  return f;
+void print(const char* what, const Summary& f) {
+  std::printf(
+      "%s: energy %.2e linear %.2e angular %.2e active gap %.2e penetration %.2e max active %d "
+      "contact [%.4f, %.4f]\n",
+      what, f.energy_rel_error_max, f.linear_momentum_error_max.value_or(-1),
+      f.angular_momentum_rel_error_max.value_or(-1), f.contact->gap_violation_max,
+      f.contact->penetration_max, f.contact->active_contacts_max, f.contact->first.value_or(-1),
+      f.contact->last.value_or(-1));
 }
 
 TEST(RingImpact, EnergyMomentumConservesThroughImpact) {
   // Rings 0.5 apart closing at 20: contact from t ~ 0.025 on, over ~1 s.
   const RingImpact scene = ring_impact(0.5, 10.0, 4.0);
-  const ImpactFigures f = run_impact(scene, "em", 0.01, 1.5, true);
-  ASSERT_TRUE(f.ok) << f.message;
-  std::printf(
-      "em ring impact: energy %.2e linear %.2e angular %.2e active gap %.2e min inactive gap "
-      "%.2e max active %d contact [%.3f, %.3f]\n",
-      f.energy_err, f.lin_err, f.ang_err, f.active_gap, f.min_inactive_gap, f.max_active,
-      f.first_contact, f.last_contact);
-  EXPECT_GE(f.max_active, 2);
-  EXPECT_LE(f.energy_err, 1e-8);
-  EXPECT_LE(f.lin_err, 1e-10);
-  EXPECT_LE(f.ang_err, 1e-10);
-  EXPECT_LE(f.active_gap, 1e-10);
-  EXPECT_GE(f.min_inactive_gap, -1e-10);
+  const Summary f = run_impact(scene, "em", 0.01, 1.5, true);
+  ASSERT_TRUE(f.ok()) << f.status;
+  ASSERT_TRUE(f.contact && f.linear_momentum_error_max && f.angular_momentum_rel_error_max);
+  print("em ring impact", f);
+  EXPECT_GE(f.contact->active_contacts_max, 2);
+  EXPECT_LE(f.energy_rel_error_max, 1e-8);
+  EXPECT_LE(*f.linear_momentum_error_max, 1e-10);
+  EXPECT_LE(*f.angular_momentum_rel_error_max, 1e-10);
+  EXPECT_LE(f.contact->gap_violation_max, 1e-10);
+  EXPECT_LE(f.contact->penetration_max, 1e-10);
 }
 
 TEST(RingImpact, WithoutImpactLocationEnergyIsLostAtEachImpact) {
   // Same scene, nodes activated for the whole step in which they penetrate:
   // lambda (Phi(q_{n+1}) - Phi(q_n)) = -lambda Phi(q_n) per entering node.
   const RingImpact scene = ring_impact(0.5, 10.0, 4.0);
-  const ImpactFigures on = run_impact(scene, "em", 0.01, 1.5, true);
-  const ImpactFigures off = run_impact(scene, "em", 0.01, 1.5, false);
-  ASSERT_TRUE(off.ok) << off.message;
-  std::printf("em ring impact without impact location: energy %.2e (with: %.2e)\n", off.energy_err,
-              on.energy_err);
-  EXPECT_GT(off.energy_err, 1e-4);
-  EXPECT_GT(off.energy_err, 1e3 * on.energy_err);
+  const Summary on = run_impact(scene, "em", 0.01, 1.5, true);
+  const Summary off = run_impact(scene, "em", 0.01, 1.5, false);
+  ASSERT_TRUE(off.ok()) << off.status;
+  std::printf("em ring impact without impact location: energy %.2e (with: %.2e)\n",
+              off.energy_rel_error_max, on.energy_rel_error_max);
+  EXPECT_GT(off.energy_rel_error_max, 1e-4);
+  EXPECT_GT(off.energy_rel_error_max, 1e3 * on.energy_rel_error_max);
   // Momenta do not depend on it: the constraint forces are still invariant.
-  EXPECT_LE(off.lin_err, 1e-10);
-  EXPECT_LE(off.ang_err, 1e-10);
+  EXPECT_LE(off.linear_momentum_error_max.value_or(1), 1e-10);
+  EXPECT_LE(off.angular_momentum_rel_error_max.value_or(1), 1e-10);
 }
 
 // Hard cases, each against the same figures as the paper-like run above:
@@ -210,20 +189,17 @@ TEST_P(RingImpactHard, EnergyMomentumConservesThroughImpact) {
   const HardCase c = GetParam();
   const RingImpact scene = ring_impact(0.5, c.speed, 4.0, 32, 2, 8.0, 10.0, c.young);
   const double t_end = c.t_end;
-  const ImpactFigures f = run_impact(scene, "em", c.dt, t_end, true);
-  ASSERT_TRUE(f.ok) << f.message;
-  std::printf(
-      "%s: energy %.2e linear %.2e angular %.2e active gap %.2e min inactive gap %.2e max "
-      "active %d contact [%.4f, %.4f]\n",
-      c.name, f.energy_err, f.lin_err, f.ang_err, f.active_gap, f.min_inactive_gap, f.max_active,
-      f.first_contact, f.last_contact);
-  EXPECT_GE(f.max_active, 1);                   // they touched
-  EXPECT_LT(f.last_contact, t_end - 2 * c.dt);  // and separated again
-  EXPECT_LE(f.energy_err, 1e-8);
-  EXPECT_LE(f.lin_err, 1e-10);
-  EXPECT_LE(f.ang_err, 1e-10);
-  EXPECT_LE(f.active_gap, 1e-10);
-  EXPECT_GE(f.min_inactive_gap, -1e-10);
+  const Summary f = run_impact(scene, "em", c.dt, t_end, true);
+  ASSERT_TRUE(f.ok()) << f.status;
+  ASSERT_TRUE(f.contact && f.contact->last);
+  print(c.name, f);
+  EXPECT_GE(f.contact->active_contacts_max, 1);   // they touched
+  EXPECT_LT(*f.contact->last, t_end - 2 * c.dt);  // and separated again
+  EXPECT_LE(f.energy_rel_error_max, 1e-8);
+  EXPECT_LE(f.linear_momentum_error_max.value_or(1), 1e-10);
+  EXPECT_LE(f.angular_momentum_rel_error_max.value_or(1), 1e-10);
+  EXPECT_LE(f.contact->gap_violation_max, 1e-10);
+  EXPECT_LE(f.contact->penetration_max, 1e-10);
 }
 
 INSTANTIATE_TEST_SUITE_P(Cases, RingImpactHard,

@@ -12,49 +12,40 @@
 #include <cmath>
 #include <numeric>
 
-#include "contact_systems.hpp"
 #include "core/fe_element.hpp"
 #include "core/gradient.hpp"
 #include "integrators/statics.hpp"
+#include "paper_scenes.hpp"
 
 namespace emdae {
 namespace {
 using namespace test_systems;
 
 struct Blocks {
-  std::unique_ptr<System> system;
+  std::unique_ptr<Model> model;
+  System* system = nullptr;
   BodyInfo lower, upper;
   const MortarContact* contact = nullptr;
 };
 
 Blocks stacked_blocks(int n_lower, int n_upper, double squeeze, MaterialModel model) {
   Blocks b;
-  b.system = std::make_unique<System>(2);
-  System& s = *b.system;
+  b.model = std::make_unique<Model>(2);
+  Model& m = *b.model;
   const Material mat = make_material(model, 100.0, 0.3, 1.0);
-  const Mesh lower = rectangle_mesh(Eigen::Vector2d(0, 0), 2.0, 1.0, n_lower, 3);
-  const Mesh upper = rectangle_mesh(Eigen::Vector2d(0, 1.0), 2.0, 1.0, n_upper, 3);
-  BodyOptions lo, up;
-  lo.name = "lower", up.name = "upper";
-  b.lower = add_body(s, lower, mat, lo);
-  b.upper = add_body(s, upper, mat, up);
+  b.lower = m.add_body("lower", rectangle_mesh({0, 0}, 2.0, 1.0, n_lower, 3), mat).info;
+  b.upper = m.add_body("upper", rectangle_mesh({0, 1.0}, 2.0, 1.0, n_upper, 3), mat).info;
+  System& s = m.system();
   // Rollers at the base (y fixed), one node also fixed in x; the top pressed
   // down by `squeeze`, its left corner fixed in x (the upper block would
   // otherwise slide freely on the frictionless interface).
-  for (int n : lower.node_sets.at("bottom"))
-    s.prescribe({s.dof(n + b.lower.node_offset, 1), {}, {}});
-  s.prescribe({s.dof(lower.node_sets.at("bottom").front() + b.lower.node_offset, 0), {}, {}});
-  for (int n : upper.node_sets.at("top")) {
-    const int node = n + b.upper.node_offset;
-    const double y = s.initial_positions()[s.dof(node, 1)] - squeeze;
-    s.prescribe({s.dof(node, 1), [y](double) { return y; }, {}});
-  }
-  s.prescribe({s.dof(upper.node_sets.at("top").front() + b.upper.node_offset, 0), {}, {}});
-  auto contact =
-      std::make_unique<MortarContact>(s, surface(upper, "bottom", b.upper.node_offset),
-                                      surface(lower, "top", b.lower.node_offset), "interface");
-  b.contact = contact.get();
-  s.add_unilateral(std::move(contact));
+  m.fix("lower.bottom", Components::Y);
+  s.prescribe({s.dof(m.nodes("lower.bottom").front(), 0), {}, {}});
+  m.prescribe_displacement("upper.top", Eigen::Vector2d(0.0, -squeeze), TimeFunction::constant(1.0),
+                           Components::Y);
+  s.prescribe({s.dof(m.nodes("upper.top").front(), 0), {}, {}});
+  b.contact = mortar(m, add_mortar_contact(m, "upper.bottom", "lower.top", "interface"));
+  b.system = &s;
   return b;
 }
 

@@ -28,7 +28,9 @@
 #include "core/mesh.hpp"
 #include "core/quantities.hpp"
 #include "integrators/energy_momentum.hpp"
+#include "integrators/schemes.hpp"
 #include "integrators/stepper.hpp"
+#include "run/run.hpp"
 
 namespace emdae {
 namespace {
@@ -555,61 +557,41 @@ TEST(Mass, SeveralBodiesInOneSystem) {
 
 // --- time integration ----------------------------------------------------------
 
-struct FlightFigures {
-  bool failed = false;
-  long steps = 0;
-  double energy_err = 0.0, linear_err = 0.0, angular_err = 0.0;
-  int max_iterations = 0;
-  double mean_iterations = 0.0;
-  double seconds = 0.0;
-  Vec q;
-};
-
 // The paper's material on a ring (inner radius 9, outer 10, 64 x 1 elements)
 // translating at (3, -1) and spinning at omega about its centroid. Starting
 // unstressed, the centrifugal load sets off breathing oscillations.
-std::unique_ptr<System> spinning_ring(MaterialModel model, int n_around, double omega) {
-  auto s = std::make_unique<System>(2);
-  add_body(*s, ring_mesh(Eigen::Vector2d(1.0, 2.0), 9.0, 10.0, n_around, 1), paper_material(model),
-           BodyOptions{false, Eigen::Vector2d(3.0, -1.0), omega, "ring"});
-  return s;
+std::unique_ptr<Model> spinning_ring(MaterialModel model, int n_around, double omega) {
+  auto m = std::make_unique<Model>(2);
+  m->add_body("ring", ring_mesh(Eigen::Vector2d(1.0, 2.0), 9.0, 10.0, n_around, 1),
+              paper_material(model), BodyOptions{false, Eigen::Vector2d(3.0, -1.0), omega, "ring"});
+  return m;
 }
 
-FlightFigures fly(const System& s, const std::string& scheme, double dt, long n_steps,
-                  double tolerance = 1e-11) {
-  auto stepper = make_stepper(scheme, s, NewtonSettings{tolerance, 25, false});
-  State st = initial_state(s);
-  const Quantities q0 = measure(s, st.q, st.v, st.t);
-  FlightFigures r;
-  long iterations = 0;
-  const auto start = std::chrono::steady_clock::now();
-  for (; r.steps < n_steps; ++r.steps) {
-    const StepStats stats = stepper->step(st, dt);
-    if (!stats.converged) {
-      r.failed = true;
-      break;
-    }
-    iterations += stats.iterations;
-    r.max_iterations = std::max(r.max_iterations, stats.iterations);
-    const Quantities q = measure(s, st.q, st.v, st.t);
-    r.energy_err = std::max(r.energy_err, std::abs(q.total() - q0.total()) / q0.total());
-    r.linear_err = std::max(
-        r.linear_err, (q.linear_momentum - q0.linear_momentum).norm() / q0.linear_momentum.norm());
-    r.angular_err =
-        std::max(r.angular_err, std::abs(q.angular_momentum[0] - q0.angular_momentum[0]) /
-                                    std::abs(q0.angular_momentum[0]));
-  }
-  r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  r.mean_iterations = r.steps ? double(iterations) / double(r.steps) : 0.0;
-  r.q = st.q;
-  return r;
+// n_steps of dt through the library's run, no cut-back: a step whose Newton
+// solve fails ends the run (summary.status says so).
+RunResult fly(Model& model, const std::string& scheme, double dt, long n_steps,
+              double tolerance = 1e-11) {
+  RunSettings settings;
+  settings.scheme = scheme;
+  settings.schemes.newton = NewtonSettings{tolerance, 25, false};
+  settings.time = TimeSettings{dt, dt * static_cast<double>(n_steps), dt};
+  return run(model, settings);
 }
 
-void report(const char* what, const FlightFigures& r) {
+// |p - p_0| relative to |p_0| (the summary's is absolute).
+double relative_linear(const Model& model, const Summary& r) {
+  const System& s = model.system();
+  const Quantities q0 = measure(s, s.initial_positions(), s.initial_velocities(), 0.0);
+  return r.linear_momentum_error_max.value_or(1.0) / q0.linear_momentum.norm();
+}
+
+void report(const char* what, const Model& model, const Summary& r) {
   std::printf(
       "  %-22s steps %5ld%s  energy %.2e  p %.2e  L %.2e  Newton mean %.2f max %d  %.2f s\n", what,
-      r.steps, r.failed ? " (Newton failed)" : "", r.energy_err, r.linear_err, r.angular_err,
-      r.mean_iterations, r.max_iterations, r.seconds);
+      r.steps, r.ok() ? "" : " (Newton failed)", r.energy_rel_error_max, relative_linear(model, r),
+      r.angular_momentum_rel_error_max.value_or(-1.0),
+      r.steps ? double(r.newton_iterations) / double(r.steps) : 0.0,
+      r.newton_iterations_max_per_step, r.cpu_seconds);
 }
 
 // Free flight, SVK, omega = 5 (rim speed 50, hoop strain ~ rho omega^2 r^2 / E
@@ -625,36 +607,36 @@ void report(const char* what, const FlightFigures& r) {
 // phenomenon.
 TEST(FreeFlight, SvkRingEnergyMomentumVersusMidpoint) {
   const auto s = spinning_ring(MaterialModel::SaintVenantKirchhoff, 64, 5.0);
-  const FlightFigures em = fly(*s, "em", 0.03, 10000);
-  report("EM, SVK, dt 0.03", em);
-  ASSERT_FALSE(em.failed);
-  EXPECT_LE(em.energy_err, 1e-9);
-  EXPECT_LE(em.linear_err, 1e-11);
-  EXPECT_LE(em.angular_err, 1e-11);
-  EXPECT_LE(em.max_iterations, 6);
+  const Summary em = fly(*s, "em", 0.03, 10000).summary;
+  report("EM, SVK, dt 0.03", *s, em);
+  ASSERT_TRUE(em.ok()) << em.status;
+  EXPECT_LE(em.energy_rel_error_max, 1e-9);
+  EXPECT_LE(relative_linear(*s, em), 1e-11);
+  EXPECT_LE(em.angular_momentum_rel_error_max.value_or(1.0), 1e-11);
+  EXPECT_LE(em.newton_iterations_max_per_step, 6);
 
-  const FlightFigures mid = fly(*s, "midpoint", 0.03, 1000);
-  report("midpoint, SVK, dt 0.03", mid);
+  const Summary mid = fly(*s, "midpoint", 0.03, 1000).summary;
+  report("midpoint, SVK, dt 0.03", *s, mid);
   // Expectation: blow-up. Either Newton fails or the energy error exceeds
   // 100 %; in both cases the error exceeds EM's by more than 10 orders.
-  EXPECT_TRUE(mid.failed || mid.energy_err > 1.0);
-  EXPECT_GT(mid.energy_err, 1.0);
-  EXPECT_GT(mid.energy_err, 1e10 * em.energy_err);
+  EXPECT_TRUE(!mid.ok() || mid.energy_rel_error_max > 1.0);
+  EXPECT_GT(mid.energy_rel_error_max, 1.0);
+  EXPECT_GT(mid.energy_rel_error_max, 1e10 * em.energy_rel_error_max);
   // Momenta are quadratic invariants of the midpoint rule as well.
-  EXPECT_LE(mid.linear_err, 1e-11);
+  EXPECT_LE(relative_linear(*s, mid), 1e-11);
 }
 
 // The same with Neo-Hooke, where W is not quadratic in C and the correction
 // of paper eq. (35) is active: energy and momenta still conserved.
 TEST(FreeFlight, NeoHookeRingEnergyMomentum) {
   const auto s = spinning_ring(MaterialModel::NeoHooke, 64, 5.0);
-  const FlightFigures em = fly(*s, "em", 0.03, 10000);
-  report("EM, Neo-Hooke, dt 0.03", em);
-  ASSERT_FALSE(em.failed);
-  EXPECT_LE(em.energy_err, 1e-9);
-  EXPECT_LE(em.linear_err, 1e-11);
-  EXPECT_LE(em.angular_err, 1e-11);
-  EXPECT_LE(em.max_iterations, 6);
+  const Summary em = fly(*s, "em", 0.03, 10000).summary;
+  report("EM, Neo-Hooke, dt 0.03", *s, em);
+  ASSERT_TRUE(em.ok()) << em.status;
+  EXPECT_LE(em.energy_rel_error_max, 1e-9);
+  EXPECT_LE(relative_linear(*s, em), 1e-11);
+  EXPECT_LE(em.angular_momentum_rel_error_max.value_or(1.0), 1e-11);
+  EXPECT_LE(em.newton_iterations_max_per_step, 6);
 }
 
 // The Newton solve keeps KLU's symbolic analysis and pivot order across time
@@ -664,7 +646,8 @@ TEST(FreeFlight, NeoHookeRingEnergyMomentum) {
 // KINSOL re-initializes at every solve, analysed and factored once per step.)
 // The figures of the run are those of the free-flight test above.
 TEST(NewtonSolve, KluAnalysisAndPivotsKeptAcrossSteps) {
-  const auto s = spinning_ring(MaterialModel::SaintVenantKirchhoff, 64, 5.0);
+  const auto model = spinning_ring(MaterialModel::SaintVenantKirchhoff, 64, 5.0);
+  const System* s = &model->system();
   EnergyMomentumStepper em(*s, NewtonSettings{1e-10, 25, false});
   State st = initial_state(*s);
   const double h0 = measure(*s, st.q, st.v, st.t).total();
@@ -692,13 +675,13 @@ TEST(Convergence, SecondOrderInTime) {
   const auto s = spinning_ring(MaterialModel::SaintVenantKirchhoff, 16, 2.0);
   const double t_end = 0.4;
   for (const std::string scheme : {"em", "midpoint"}) {
-    const FlightFigures ref = fly(*s, scheme, 0.00125 / 8, 8 * 320, 1e-12);
-    ASSERT_FALSE(ref.failed);
+    const RunResult ref = fly(*s, scheme, 0.00125 / 8, 8 * 320, 1e-12);
+    ASSERT_TRUE(ref.finished()) << ref.summary.status;
     std::vector<double> err;
     for (double dt = 0.01; dt > 0.001; dt /= 2) {
-      const FlightFigures r = fly(*s, scheme, dt, std::lround(t_end / dt), 1e-12);
-      ASSERT_FALSE(r.failed) << scheme << " dt " << dt;
-      err.push_back((r.q - ref.q).cwiseAbs().maxCoeff());
+      const RunResult r = fly(*s, scheme, dt, std::lround(t_end / dt), 1e-12);
+      ASSERT_TRUE(r.finished()) << scheme << " dt " << dt << ": " << r.summary.status;
+      err.push_back((r.state.q - ref.state.q).cwiseAbs().maxCoeff());
     }
     std::printf("  %-8s errors", scheme.c_str());
     for (double e : err) std::printf(" %.3e", e);

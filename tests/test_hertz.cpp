@@ -21,8 +21,8 @@
 #include <cmath>
 #include <cstdlib>
 
-#include "contact_systems.hpp"
 #include "integrators/statics.hpp"
+#include "paper_scenes.hpp"
 
 namespace emdae {
 namespace {

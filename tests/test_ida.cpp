@@ -37,13 +37,14 @@
 #include <string>
 #include <vector>
 
-#include "contact_systems.hpp"
 #include "core/load.hpp"
 #include "core/particles.hpp"
 #include "core/quantities.hpp"
 #include "core/user_term.hpp"
 #include "integrators/driver.hpp"
 #include "integrators/ida_stepper.hpp"
+#include "integrators/schemes.hpp"
+#include "paper_scenes.hpp"
 #include "pendulum.hpp"
 
 namespace emdae {
@@ -296,25 +297,25 @@ TEST(IdaStart, ConsistentAccelerationOfThePendulum) {
 TEST(MakeStepper, BuildsIdaAndGeneralizedAlpha) {
   auto s = pendulum();
   for (const char* name : {"ida", "galpha"}) {
-    auto stepper = make_stepper(name, *s, NewtonSettings{}, SchemeSettings{});
+    auto stepper = make_stepper(name, *s, SchemeSettings{});
     ASSERT_TRUE(stepper);
     EXPECT_EQ(stepper->name(), name);
     State st = initial_state(*s);
     EXPECT_TRUE(stepper->step(st, 0.01).converged) << name;
     EXPECT_NEAR(st.t, 0.01, 1e-15);
   }
-  // The scheme settings reach IDA (the scene's scheme.rtol, atol, max_order).
+  // The scheme settings reach IDA (the scene's [scheme.ida] rtol, atol, max_order).
   SchemeSettings capped;
-  capped.rtol = 1e-5;
-  capped.atol = 1e-6;
-  capped.max_order = 2;
-  auto ida = make_stepper("ida", *s, NewtonSettings{}, capped);
+  capped.ida.rtol = 1e-5;
+  capped.ida.atol = 1e-6;
+  capped.ida.max_order = 2;
+  auto ida = make_stepper("ida", *s, capped);
   const IdaSettings& set = dynamic_cast<const IdaStepper&>(*ida).settings();
   EXPECT_EQ(set.rtol, 1e-5);
   EXPECT_EQ(set.atol, 1e-6);
   EXPECT_EQ(set.max_order, 2);
   try {
-    make_stepper("rk4", *s, NewtonSettings{});
+    make_stepper("rk4", *s);
     FAIL() << "an unknown scheme must throw";
   } catch (const std::invalid_argument& e) {
     const std::string what = e.what();

@@ -13,51 +13,38 @@
 
 #include "core/quantities.hpp"
 #include "integrators/driver.hpp"
+#include "integrators/schemes.hpp"
 #include "particle_systems.hpp"
+#include "run/run.hpp"
 
 namespace emdae {
 namespace {
 using namespace test_systems;
 
-struct RunFigures {
-  bool ok = false;
-  double energy_err = 0, lin_err = 0, ang_err = 0, phi_max = 0;
-  int max_iters = 0;
-  double mean_iters = 0;
-  State final;
-};
+// A run of a model through the library (run/run.hpp); its summary holds the
+// figures and its state the positions at the end.
+RunResult run(Model& model, const std::string& scheme, double dt, double t_end, double tol) {
+  RunSettings settings;
+  settings.scheme = scheme;
+  settings.schemes.newton = NewtonSettings{tol, 25, false};
+  settings.time = TimeSettings{dt, t_end, dt / 16};
+  return emdae::run(model, settings);
+}
 
-RunFigures run(const System& s, const std::string& scheme, double dt, double t_end, double tol) {
-  auto stepper = make_stepper(scheme, s, NewtonSettings{tol, 25, false});
-  State st = initial_state(s);
-  const Quantities q0 = measure(s, st.q, st.v, st.t);
-  RunFigures r;
-  const RunOutcome out = integrate(
-      *stepper, st, TimeSettings{dt, t_end, dt / 16}, [&](const State& x, const AcceptedStep& a) {
-        const Quantities q = measure(s, x.q, x.v, x.t);
-        r.energy_err =
-            std::max(r.energy_err, std::abs(q.total() - q0.total()) / std::abs(q0.total()));
-        r.lin_err = std::max(r.lin_err, (q.linear_momentum - q0.linear_momentum).norm());
-        r.ang_err = std::max(r.ang_err, (q.angular_momentum - q0.angular_momentum).norm() /
-                                            q0.angular_momentum.norm());
-        r.phi_max = std::max(r.phi_max, q.phi_max);
-        r.max_iters = std::max(r.max_iters, a.stats.iterations);
-      });
-  r.ok = out.ok;
-  r.mean_iters = out.steps ? double(out.newton_iterations) / double(out.steps) : 0;
-  r.final = st;
-  return r;
+double mean_iterations(const Summary& s) {
+  return s.steps ? double(s.newton_iterations) / double(s.steps) : 0.0;
 }
 
 TEST(FourParticle, EnergyMomentumConservesEverything) {
   auto s = four_particle_system();
-  const RunFigures r = run(*s, "em", 0.01, 100.0, 1e-12);  // 10^4 steps
-  ASSERT_TRUE(r.ok);
-  EXPECT_LE(r.energy_err, 1e-10);
-  EXPECT_LE(r.ang_err, 1e-12);
-  EXPECT_LE(r.lin_err, 1e-12);
-  EXPECT_LE(r.phi_max, 1e-10);
-  EXPECT_LE(r.mean_iters, 5.0);
+  const Summary r = run(*s, "em", 0.01, 100.0, 1e-12).summary;  // 10^4 steps
+  ASSERT_TRUE(r.ok()) << r.status;
+  ASSERT_TRUE(r.linear_momentum_error_max && r.angular_momentum_rel_error_max);
+  EXPECT_LE(r.energy_rel_error_max, 1e-10);
+  EXPECT_LE(*r.angular_momentum_rel_error_max, 1e-12);
+  EXPECT_LE(*r.linear_momentum_error_max, 1e-12);
+  EXPECT_LE(r.constraint_residual_max, 1e-10);
+  EXPECT_LE(mean_iterations(r), 5.0);
 }
 
 TEST(FourParticle, MidpointConservesMomentaButNotEnergy) {
@@ -65,11 +52,12 @@ TEST(FourParticle, MidpointConservesMomentaButNotEnergy) {
   // are gradients of invariant functions at q_mid) but not energy: the
   // potential is not quadratic.
   auto s = four_particle_system();
-  const RunFigures r = run(*s, "midpoint", 0.01, 100.0, 1e-12);
-  ASSERT_TRUE(r.ok);
-  EXPECT_LE(r.lin_err, 1e-12);
-  EXPECT_LE(r.ang_err, 1e-11);
-  EXPECT_GT(r.energy_err, 1e-7);
+  const Summary r = run(*s, "midpoint", 0.01, 100.0, 1e-12).summary;
+  ASSERT_TRUE(r.ok()) << r.status;
+  ASSERT_TRUE(r.linear_momentum_error_max && r.angular_momentum_rel_error_max);
+  EXPECT_LE(*r.linear_momentum_error_max, 1e-12);
+  EXPECT_LE(*r.angular_momentum_rel_error_max, 1e-11);
+  EXPECT_GT(r.energy_rel_error_max, 1e-7);
 }
 
 // Stiff elastic pendulum: k L / (m g) = 1e6, so the spring's period (2 pi
@@ -78,9 +66,9 @@ TEST(FourParticle, MidpointConservesMomentaButNotEnergy) {
 // against a gravitational scale of ~10.
 TEST(StiffPendulum, EnergyMomentumConservesEnergyAtLargeStep) {
   auto s = elastic_pendulum(9.81e6);
-  const RunFigures em = run(*s, "em", 0.05, 10.0, 1e-11);
-  ASSERT_TRUE(em.ok);
-  EXPECT_LE(em.energy_err, 1e-10);
+  const Summary em = run(*s, "em", 0.05, 10.0, 1e-11).summary;
+  ASSERT_TRUE(em.ok()) << em.status;
+  EXPECT_LE(em.energy_rel_error_max, 1e-10);
 }
 
 TEST(StiffPendulum, MidpointLosesEnergyStabilitySideBySide) {
@@ -89,20 +77,21 @@ TEST(StiffPendulum, MidpointLosesEnergyStabilitySideBySide) {
   // spring's period its energy error is (measured) of order one or the run
   // stops on a Newton failure. Either way it is at least 1e6 times EM's.
   auto s = elastic_pendulum(9.81e6);
-  const RunFigures em = run(*s, "em", 0.05, 10.0, 1e-11);
-  const RunFigures mp = run(*s, "midpoint", 0.05, 10.0, 1e-11);
-  if (mp.ok) {
-    EXPECT_GT(mp.energy_err, 1e-3);
-    EXPECT_GT(mp.energy_err, 1e6 * em.energy_err);
+  const Summary em = run(*s, "em", 0.05, 10.0, 1e-11).summary;
+  const Summary mp = run(*s, "midpoint", 0.05, 10.0, 1e-11).summary;
+  if (mp.ok()) {
+    EXPECT_GT(mp.energy_rel_error_max, 1e-3);
+    EXPECT_GT(mp.energy_rel_error_max, 1e6 * em.energy_rel_error_max);
   }
   std::printf("stiff pendulum dt=0.05: em energy error %.3e, midpoint %s energy error %.3e\n",
-              em.energy_err, mp.ok ? "ok" : "FAILED", mp.energy_err);
+              em.energy_rel_error_max, mp.ok() ? "ok" : "FAILED", mp.energy_rel_error_max);
 }
 
 // Reference for a non-stiff elastic pendulum (k = 100) by an independent
 // route: GSL's rk8pd on the unconstrained ODE m x'' = -k (|x| - L) x/|x| + m g,
 // to 1e-14.
-Vec elastic_pendulum_reference(const System& s, double k, double t_end) {
+Vec elastic_pendulum_reference(const Model& model, double k, double t_end) {
+  const System& s = model.system();
   struct P {
     double k;
   } par{k};
@@ -147,9 +136,9 @@ TEST_P(Order, SecondOrderOnElasticPendulumAgainstGsl) {
   const Vec ref = elastic_pendulum_reference(*s, k, t_end);
   std::vector<double> dts{0.02, 0.01, 0.005, 0.0025}, errs;
   for (double dt : dts) {
-    const RunFigures r = run(*s, GetParam(), dt, t_end, 1e-13);
-    ASSERT_TRUE(r.ok);
-    errs.push_back((r.final.q.segment(2, 2) - ref).norm());
+    const RunResult r = run(*s, GetParam(), dt, t_end, 1e-13);
+    ASSERT_TRUE(r.summary.ok()) << r.summary.status;
+    errs.push_back((r.state.q.segment(2, 2) - ref).norm());
   }
   const double p = observed_order(dts, errs);
   std::printf("%s elastic pendulum: errors %.3e %.3e %.3e %.3e, order %.3f\n", GetParam().c_str(),
@@ -162,14 +151,14 @@ TEST_P(Order, SecondOrderOnDoublePendulumAgainstFineRun) {
   // step (its error is ~1000 times below the finest of the four runs).
   auto s = double_pendulum();
   const double t_end = 1.0;
-  const RunFigures ref = run(*s, GetParam(), 0.0025 / 32, t_end, 1e-13);
-  ASSERT_TRUE(ref.ok);
+  const RunResult ref = run(*s, GetParam(), 0.0025 / 32, t_end, 1e-13);
+  ASSERT_TRUE(ref.summary.ok()) << ref.summary.status;
   std::vector<double> dts{0.02, 0.01, 0.005, 0.0025}, errs;
   for (double dt : dts) {
-    const RunFigures r = run(*s, GetParam(), dt, t_end, 1e-13);
-    ASSERT_TRUE(r.ok);
-    EXPECT_LE(r.phi_max, 1e-12);
-    errs.push_back((r.final.q - ref.final.q).norm());
+    const RunResult r = run(*s, GetParam(), dt, t_end, 1e-13);
+    ASSERT_TRUE(r.summary.ok()) << r.summary.status;
+    EXPECT_LE(r.summary.constraint_residual_max, 1e-12);
+    errs.push_back((r.state.q - ref.state.q).norm());
   }
   const double p = observed_order(dts, errs);
   std::printf("%s double pendulum: errors %.3e %.3e %.3e %.3e, order %.3f\n", GetParam().c_str(),
@@ -186,10 +175,10 @@ TEST(Newton, ConvergesQuadraticallyInFewIterations) {
                      +[] { return elastic_pendulum(100.0); }}) {
     auto s = make();
     for (const char* scheme : {"em", "midpoint"}) {
-      const RunFigures r = run(*s, scheme, 0.01, 2.0, 1e-12);
-      ASSERT_TRUE(r.ok);
-      EXPECT_LE(r.mean_iters, 5.0) << scheme;
-      EXPECT_LE(r.max_iters, 6) << scheme;
+      const Summary r = run(*s, scheme, 0.01, 2.0, 1e-12).summary;
+      ASSERT_TRUE(r.ok()) << r.status;
+      EXPECT_LE(mean_iterations(r), 5.0) << scheme;
+      EXPECT_LE(r.newton_iterations_max_per_step, 6) << scheme;
     }
   }
 }
@@ -199,8 +188,9 @@ TEST(Driver, CutsBackOnNewtonFailureAndReportsIt) {
   // pendulum fails, the driver halves the step until Newton converges, and
   // records the cut-backs; with min_dt too large it stops with a message
   // naming the time, the step and the residual.
-  auto s = elastic_pendulum(9.81e6);
-  auto stepper = make_stepper("em", *s, NewtonSettings{1e-11, 2, false});
+  auto model = elastic_pendulum(9.81e6);
+  const System* s = &model->system();
+  auto stepper = make_stepper("em", *s, {NewtonSettings{1e-11, 2, false}});
   State st = initial_state(*s);
   const RunOutcome out = integrate(*stepper, st, TimeSettings{0.05, 0.1, 0.05 / 4},
                                    [](const State&, const AcceptedStep&) {});
@@ -212,7 +202,7 @@ TEST(Driver, CutsBackOnNewtonFailureAndReportsIt) {
 
   // With a floor low enough, the run completes with smaller steps.
   State st2 = initial_state(*s);
-  auto stepper2 = make_stepper("em", *s, NewtonSettings{1e-11, 4, false});
+  auto stepper2 = make_stepper("em", *s, {NewtonSettings{1e-11, 4, false}});
   long accepted = 0;
   const RunOutcome ok = integrate(*stepper2, st2, TimeSettings{0.05, 0.1, 1e-6},
                                   [&](const State&, const AcceptedStep&) { ++accepted; });

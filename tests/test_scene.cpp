@@ -201,6 +201,12 @@ std::vector<Malformed> malformed_scenes() {
        kTime + "[[particles]]\nname = \"a\"\nposition = [0.0, 0.0]\nfixed = true\n",
        "[[particles]]",
        {"key 'particles'", "every particle is fixed"}},
+      // The place named is the first particle of the file, whatever its name.
+      {"all_fixed_first_declared",
+       kTime + "[[particles]] # z\nname = \"z\"\nposition = [0.0, 0.0]\nfixed = true\n" +
+           "[[particles]]\nname = \"a\"\nposition = [1.0, 0.0]\nfixed = true\n",
+       "[[particles]] # z",
+       {"key 'particles'", "every particle is fixed"}},
       {"coincident_spring",
        kValid + "[[particles]]\nname = \"c\"\nmass = 1.0\nposition = [0.0, 0.0]\n" +
            "[[springs]]\nbetween = [\"a\", \"c\"]\nstiffness = 1.0\n",
@@ -259,36 +265,36 @@ TEST(Scene, DirectoryIsNotAScene) {
 TEST(Scene, DefaultsApply) {
   TempDir dir;
   const auto scene = load_scene(dir.write("min.toml", kValid));
-  EXPECT_EQ(scene->name, "min");  // the file's stem without [scene] name
-  EXPECT_EQ(scene->dimension, 2);
-  EXPECT_EQ(scene->scheme, "em");
-  EXPECT_DOUBLE_EQ(scene->time.dt, 0.01);
-  EXPECT_DOUBLE_EQ(scene->time.t_end, 0.1);
-  EXPECT_EQ(scene->time.min_dt, 0.0);
-  EXPECT_DOUBLE_EQ(scene->newton.tolerance, 1e-10);
-  EXPECT_EQ(scene->newton.max_iterations, 20);
-  EXPECT_FALSE(scene->newton.line_search);
-  EXPECT_EQ(scene->output.every, 1);
-  EXPECT_FALSE(scene->tolerances.any());
-  EXPECT_EQ(scene->system->n_nodes(), 2);
-  EXPECT_EQ(scene->system->n_constraints(), 0);
-  EXPECT_TRUE(scene->system->potentials().empty());
+  EXPECT_EQ(scene->settings.name, "min");  // the file's stem without [scene] name
+  EXPECT_EQ(scene->model->dim(), 2);
+  EXPECT_EQ(scene->settings.scheme, "em");
+  EXPECT_DOUBLE_EQ(scene->settings.time.dt, 0.01);
+  EXPECT_DOUBLE_EQ(scene->settings.time.t_end, 0.1);
+  EXPECT_EQ(scene->settings.time.min_dt, 0.0);
+  EXPECT_DOUBLE_EQ(scene->settings.schemes.newton.tolerance, 1e-10);
+  EXPECT_EQ(scene->settings.schemes.newton.max_iterations, 20);
+  EXPECT_FALSE(scene->settings.schemes.newton.line_search);
+  EXPECT_EQ(scene->settings.output.every, 1);
+  EXPECT_FALSE(scene->settings.tolerances.any());
+  EXPECT_EQ(scene->system().n_nodes(), 2);
+  EXPECT_EQ(scene->system().n_constraints(), 0);
+  EXPECT_TRUE(scene->system().potentials().empty());
   EXPECT_TRUE(scene->warnings.empty());
-  EXPECT_TRUE(scene->system->initial_velocities().isZero());
+  EXPECT_TRUE(scene->system().initial_velocities().isZero());
 }
 
 TEST(Scene, EmptyListOfSpringsIsAllowed) {
   TempDir dir;
   const auto scene = load_scene(dir.write("e.toml", "springs = []\n" + kValid));
-  EXPECT_TRUE(scene->system->potentials().empty());
+  EXPECT_TRUE(scene->system().potentials().empty());
 }
 
 TEST(Scene, IntegersAreAcceptedAsNumbers) {
   TempDir dir;
   const auto scene =
       load_scene(dir.write("ints.toml", "[time]\ndt = 1\nt_end = 10\n" + kParticles));
-  EXPECT_EQ(scene->time.dt, 1.0);
-  EXPECT_EQ(scene->time.t_end, 10.0);
+  EXPECT_EQ(scene->settings.time.dt, 1.0);
+  EXPECT_EQ(scene->settings.time.t_end, 10.0);
 }
 
 TEST(Scene, RestLengthAndLinkLengthDefaultToInitialDistance) {
@@ -297,7 +303,7 @@ TEST(Scene, RestLengthAndLinkLengthDefaultToInitialDistance) {
       "lengths.toml", kValid + "[[particles]]\nname = \"c\"\nmass = 2.0\nposition = [1.0, 2.0]\n"
                                "[[springs]]\nbetween = [\"a\", \"c\"]\nstiffness = 3.0\n"
                                "[[links]]\nbetween = [\"a\", \"b\"]\n"));
-  const System& s = *scene->system;
+  const System& s = scene->system();
   ASSERT_EQ(s.potentials().size(), 1u);
   ASSERT_EQ(s.constraints().size(), 1u);
   // At rest length and with the link satisfied, energy and residual vanish.
@@ -312,17 +318,17 @@ TEST(Scene, GravityLoadsOnlyFreeParticles) {
       dir.write("g.toml", kTime + "[gravity]\nacceleration = [0.0, -9.81]\n" +
                               "[[particles]]\nname = \"p\"\nposition = [0.0, 0.0]\nfixed = true\n" +
                               "[[particles]]\nname = \"q\"\nmass = 2.0\nposition = [1.0, 0.0]\n"));
-  EXPECT_EQ(scene->system->potentials().size(), 1u);
-  EXPECT_EQ(scene->system->prescribed().size(), 2u);
-  EXPECT_FALSE(scene->system->symmetry().translation);
+  EXPECT_EQ(scene->system().potentials().size(), 1u);
+  EXPECT_EQ(scene->system().prescribed().size(), 2u);
+  EXPECT_FALSE(scene->system().symmetry().translation);
 }
 
 TEST(Scene, ZeroGravityKeepsSymmetry) {
   TempDir dir;
   const auto scene =
       load_scene(dir.write("g0.toml", kValid + "[gravity]\nacceleration = [0.0, 0.0]\n"));
-  EXPECT_TRUE(scene->system->potentials().empty());
-  EXPECT_TRUE(scene->system->symmetry().translation);
+  EXPECT_TRUE(scene->system().potentials().empty());
+  EXPECT_TRUE(scene->system().symmetry().translation);
 }
 
 TEST(Scene, InconsistentLinkVelocityWarns) {
@@ -337,7 +343,7 @@ TEST(Scene, InconsistentLinkVelocityWarns) {
 
 TEST(Scene, TextWithSourceName) {
   const auto scene = load_scene_text(kValid, "<built-in>");
-  EXPECT_EQ(scene->source_path, "<built-in>");
+  EXPECT_EQ(scene->settings.source, "<built-in>");
   try {
     load_scene_text("[time]\ndt = -1\nt_end = 1\n" + kParticles, "<built-in>");
     FAIL();
@@ -354,11 +360,11 @@ TEST(SceneOverrides, ReplaceAndAddValues) {
   const auto scene =
       load_scene(path, {"time.dt=0.005", "scheme.name=midpoint", "particles[1].mass=3",
                         "gravity.acceleration=[0, -1]", "output.every = 5"});
-  EXPECT_DOUBLE_EQ(scene->time.dt, 0.005);
-  EXPECT_EQ(scene->scheme, "midpoint");
-  EXPECT_DOUBLE_EQ(scene->system->lumped_mass()[2], 3.0);
-  EXPECT_EQ(scene->system->potentials().size(), 2u);
-  EXPECT_EQ(scene->output.every, 5);
+  EXPECT_DOUBLE_EQ(scene->settings.time.dt, 0.005);
+  EXPECT_EQ(scene->settings.scheme, "midpoint");
+  EXPECT_DOUBLE_EQ(scene->system().lumped_mass()[2], 3.0);
+  EXPECT_EQ(scene->system().potentials().size(), 2u);
+  EXPECT_EQ(scene->settings.output.every, 5);
 }
 
 TEST(SceneOverrides, AreValidatedAndNamed) {
@@ -412,8 +418,8 @@ std::string example(const std::string& name) {
 
 TEST(Examples, DoublePendulum) {
   const auto scene = load_scene(example("double_pendulum"));
-  const System& s = *scene->system;
-  EXPECT_EQ(scene->name, "double_pendulum");
+  const System& s = scene->system();
+  EXPECT_EQ(scene->settings.name, "double_pendulum");
   EXPECT_EQ(s.dim(), 2);
   EXPECT_EQ(s.n_nodes(), 2);
   EXPECT_EQ(s.n_dofs(), 4);
@@ -421,13 +427,13 @@ TEST(Examples, DoublePendulum) {
   EXPECT_EQ(s.potentials().size(), 2u);  // gravity on both
   EXPECT_TRUE(s.prescribed().empty());
   EXPECT_FALSE(s.symmetry().translation);
-  EXPECT_EQ(scene->scheme, "em");
+  EXPECT_EQ(scene->settings.scheme, "em");
   EXPECT_TRUE(scene->warnings.empty());
 }
 
 TEST(Examples, ElasticPendulum) {
   const auto scene = load_scene(example("elastic_pendulum"));
-  const System& s = *scene->system;
+  const System& s = scene->system();
   EXPECT_EQ(s.dim(), 2);
   EXPECT_EQ(s.n_nodes(), 2);
   EXPECT_EQ(s.prescribed().size(), 2u);  // the pivot
@@ -438,7 +444,7 @@ TEST(Examples, ElasticPendulum) {
 
 TEST(Examples, FourParticle) {
   const auto scene = load_scene(example("four_particle"));
-  const System& s = *scene->system;
+  const System& s = scene->system();
   EXPECT_EQ(s.dim(), 3);
   EXPECT_EQ(s.n_nodes(), 4);
   EXPECT_EQ(s.n_dofs(), 12);
@@ -452,18 +458,18 @@ TEST(Examples, FourParticle) {
   const Quantities q = measure(s, st.q, st.v, 0.0);
   EXPECT_GT(q.linear_momentum.norm(), 0.1);
   EXPECT_GT(q.angular_momentum.norm(), 0.1);
-  EXPECT_TRUE(scene->tolerances.any());
+  EXPECT_TRUE(scene->settings.tolerances.any());
 }
 
 TEST(Examples, StiffPendulum) {
   const auto scene = load_scene(example("stiff_pendulum"));
-  const System& s = *scene->system;
+  const System& s = scene->system();
   EXPECT_EQ(s.n_nodes(), 2);
   EXPECT_EQ(s.potentials().size(), 2u);
   // k L / (m g) = 1e6 and dt far beyond the spring's period 2 pi sqrt(m/k).
   const double k = 9.81e6, m = 1.0;
   const double pi = 3.141592653589793;
-  EXPECT_GT(scene->time.dt, 10 * 2 * pi * std::sqrt(m / k));
+  EXPECT_GT(scene->settings.time.dt, 10 * 2 * pi * std::sqrt(m / k));
   // The spring's energy at a small radial stretch delta is k/2 delta^2.
   const Term& spring = *s.potentials()[0];
   ASSERT_EQ(spring.n_local(), 4);

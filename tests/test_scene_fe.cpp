@@ -1,8 +1,9 @@
 // Scene files with FE bodies, contact, Dirichlet sets, loads and statics:
 // every malformed input names the file, line and key (and the CLI exits 2
 // without creating output); every example builds exactly the system the C++
-// API builds for it (tests/contact_systems.hpp); and the three FE examples run
-// through the emdae command with the figures their comments promise.
+// API builds for it (tests/paper_scenes.hpp); and the three FE examples run
+// through the emdae command (test_examples_fe_run.cpp) with the figures their
+// comments promise.
 #include <gtest/gtest.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -18,11 +19,13 @@
 #include <vector>
 
 #include "cli/scene.hpp"
-#include "contact_systems.hpp"
 #include "core/quantities.hpp"
+#include "fe_scenes.hpp"
 #include "integrators/driver.hpp"
+#include "integrators/schemes.hpp"
 #include "integrators/stepper.hpp"
 #include "malformed_scene.hpp"
+#include "paper_scenes.hpp"
 #include "temp_dir.hpp"
 #include "verify/recorder.hpp"
 
@@ -39,61 +42,16 @@ using test_systems::read_json;
 using test_systems::read_lines;
 using test_systems::TempDir;
 
-std::vector<std::string> split(const std::string& line) {
-  std::vector<std::string> cells;
-  std::stringstream in(line);
-  for (std::string cell; std::getline(in, cell, ',');) cells.push_back(cell);
-  return cells;
-}
-
-std::string join(const std::vector<std::string>& cells) {
-  std::string out;
-  for (const auto& c : cells) out += (out.empty() ? "" : ",") + c;
-  return out;
-}
-
+using test_systems::kContact;
+using test_systems::kRings;
+using test_systems::kStatic;
+using test_systems::kTime;
+using test_systems::kTorque;
+using test_systems::kValid;
 using test_systems::line_of;
-
-// --- a small valid FE scene, and variations of it that must be refused -----------
-
-const std::string kTime = "[time]\ndt = 0.01\nt_end = 0.1\n\n";
-
-std::string ring(const std::string& name, double x, const std::string& extra = "") {
-  return "[[bodies]]\nname = \"" + name + "\"\n" + extra +
-         "[bodies.mesh]\ntype = \"ring\"\ncentre = [" + std::to_string(x) +
-         ", 0.0]\ninner_radius = 8.0\nouter_radius = 10.0\naround = 16\nthrough = 1\n"
-         "[bodies.material]\nmodel = \"svk\"\nyoung = 100.0\npoisson = 0.1\ndensity = 0.001\n\n";
-}
-
-const std::string kRings = ring("a", -10.5, "velocity = [1.0, 0.0]\n") + ring("b", 10.5);
-const std::string kContact = "[[contacts]]\nslave = \"a.outer\"\nmaster = \"b.outer\"\n\n";
-const std::string kValid = kTime + kRings + kContact;
-const std::string kTorque =
-    "[[loads]]\ntype = \"torque\"\non = \"a.inner\"\ntorque = 5.0\n"
-    "time_function = { type = \"hat\", start = 0.0, end = 0.05 }\n\n";
-
-// A small static analysis ([statics], no [time]): a block pressed on another.
-const std::string kStatic =
-    "[[bodies]]\nname = \"lower\"\n"
-    "mesh = { type = \"rectangle\", origin = [0.0, 0.0], width = 2.0, height = 1.0, nx = 2, "
-    "ny = 1 }\nmaterial = { young = 100.0, poisson = 0.3, density = 1.0 }\n\n"
-    "[[bodies]]\nname = \"upper\"\n"
-    "mesh = { type = \"rectangle\", origin = [0.0, 1.0], width = 2.0, height = 1.0, nx = 3, "
-    "ny = 1 }\nmaterial = { young = 100.0, poisson = 0.3, density = 1.0 }\n\n"
-    "[[contacts]]\nname = \"interface\"\nslave = \"upper.bottom\"\nmaster = \"lower.top\"\n\n"
-    "[[dirichlet]]\nnodes = \"lower.bottom\"\nfixed = true\ncomponents = \"y\"\n\n"
-    "[[dirichlet]]\nnodes = \"upper.top\"\ndisplacement = [0.0, -0.01]\ncomponents = \"y\"\n"
-    "time_function = { type = \"ramp\", start = 0.0, end = 1.0 }\n\n"
-    "[statics]\nload_time = 1.0\n";
-
 using test_systems::Malformed;
-
-// `text` with the first `from` replaced by `to`.
-std::string with(std::string text, const std::string& from, const std::string& to) {
-  const auto at = text.find(from);
-  if (at != std::string::npos) text.replace(at, from.size(), to);
-  return text;
-}
+using test_systems::ring;
+using test_systems::with;
 
 std::vector<Malformed> malformed_fe_scenes() {
   return {
@@ -233,7 +191,7 @@ std::vector<Malformed> malformed_fe_scenes() {
        kValid + "[[dirichlet]]\nnodes = \"b.outer\"\nfixed = true\n\n" +
            "[[anchors]]\nnodes = \"b.outer\"  # clamped already\npoint = [10.5, 0.0]\n",
        "# clamped",
-       {"key 'anchors[0].nodes'", "prescribed by [[dirichlet]]"}},
+       {"key 'anchors[0].nodes'", "prescribed by a Dirichlet set ([[dirichlet]])"}},
       {"anchor_twice",
        kValid + "[[anchors]]\nnodes = \"b.outer\"\npoint = [10.5, 0.0]\n\n" +
            "[[anchors]]\nnodes = \"b.outer\"  # again\npoint = [0.0, 0.0]\n",
@@ -243,6 +201,18 @@ std::vector<Malformed> malformed_fe_scenes() {
        kTime + kRings + "[scheme]\nname = \"ida\"\nmax_order = 6\n",
        "max_order",
        {"key 'scheme.max_order'", "1..5", "received 6"}},
+      {"ida_table_max_order_out_of_range",
+       kTime + kRings + "[scheme]\nname = \"em\"\n[scheme.ida]\nmax_order = 6\n",
+       "max_order",
+       {"key 'scheme.ida.max_order'", "1..5", "received 6"}},
+      {"galpha_table_unknown_key",
+       kTime + kRings + "[scheme.galpha]\nrho = 0.5\n",
+       "rho =",
+       {"key 'scheme.galpha.rho'", "unknown key", "did you mean 'rho_inf'?"}},
+      {"ida_key_given_twice",
+       kTime + kRings + "[scheme]\nrtol = 1e-6\n[scheme.ida]\natol = 1e-6\nrtol = 1e-7\n",
+       "rtol = 1e-6",
+       {"key 'scheme.rtol'", "given twice", "scheme.ida.rtol"}},
       {"search_margin_negative",
        with(kValid, "master = \"b.outer\"\n", "master = \"b.outer\"\nsearch_margin = -1.0\n"),
        "search_margin",
@@ -355,21 +325,21 @@ TEST(SceneFe, SchemeFromTheCommandLineIsNamedAsTheCulprit) {
 TEST(SceneFe, SmallScenesBuildBodiesContactAndNames) {
   TempDir dir;
   const auto scene = load_scene(dir.write("ok.toml", kValid));
-  ASSERT_EQ(scene->bodies.size(), 2u);
-  EXPECT_EQ(scene->bodies[0].name, "a");
-  EXPECT_EQ(scene->bodies[0].n_nodes, 32);
-  EXPECT_EQ(scene->bodies[0].n_elements, 16);
-  EXPECT_EQ(scene->bodies[1].node_offset, 32);
-  EXPECT_EQ(scene->system->n_nodes(), 64);
-  EXPECT_EQ(scene->system->potentials().size(), 32u);
-  ASSERT_EQ(scene->contacts.size(), 1u);
-  EXPECT_EQ(scene->contacts[0].name, "a.outer/b.outer");
-  EXPECT_EQ(scene->contacts[0].slave_segments, 16);
-  EXPECT_EQ(scene->system->n_unilateral(), 16);
+  ASSERT_EQ(scene->model->bodies().size(), 2u);
+  EXPECT_EQ(scene->model->bodies()[0].name, "a");
+  EXPECT_EQ(scene->model->bodies()[0].info.n_nodes, 32);
+  EXPECT_EQ(scene->model->bodies()[0].info.n_elements, 16);
+  EXPECT_EQ(scene->model->bodies()[1].info.node_offset, 32);
+  EXPECT_EQ(scene->system().n_nodes(), 64);
+  EXPECT_EQ(scene->system().potentials().size(), 32u);
+  ASSERT_EQ(scene->model->contacts().size(), 1u);
+  EXPECT_EQ(scene->model->contacts()[0].name, "a.outer/b.outer");
+  EXPECT_EQ(scene->model->contacts()[0].slave_segments, 16);
+  EXPECT_EQ(scene->system().n_unilateral(), 16);
   EXPECT_TRUE(scene->warnings.empty());
   // Body mass = rho times the (polygonal) ring area.
   const double area = 0.5 * 16 * std::sin(2 * std::acos(-1.0) / 16) * (100.0 - 64.0);
-  EXPECT_NEAR(scene->bodies[0].mass, 0.001 * area, 1e-12);
+  EXPECT_NEAR(scene->model->bodies()[0].mass(), 0.001 * area, 1e-12);
 }
 
 TEST(SceneFe, BodyForceAndTractionAreConsistentNodalLoads) {
@@ -385,10 +355,10 @@ TEST(SceneFe, BodyForceAndTractionAreConsistentNodalLoads) {
       "[[loads]]\nname = \"push\"\ntype = \"traction\"\non = \"plate.right\"\n"
       "traction = [-4.0, 1.0]\n";
   const auto scene = load_scene(dir.write("plate.toml", plate));
-  const System& s = *scene->system;
+  const System& s = scene->system();
   ASSERT_EQ(s.loads().size(), 2u);
-  ASSERT_EQ(scene->loads.size(), 2u);
-  EXPECT_EQ(scene->loads[1].name, "push");
+  ASSERT_EQ(scene->model->loads().size(), 2u);
+  EXPECT_EQ(scene->model->loads()[1].name, "push");
   // At t = 0.5 the ramp is at 1: body force m b with m = rho w h = 6, plus
   // the traction times the right edge's length 1.
   Vec f = Vec::Zero(s.n_dofs());
@@ -401,7 +371,7 @@ TEST(SceneFe, BodyForceAndTractionAreConsistentNodalLoads) {
   // quarter of an element's mass, an interior node four quarters.
   const double element_mass = 3.0 * 0.5 * 0.5;
   EXPECT_NEAR(f[1] - 0.0, element_mass / 4 * -2.0, 1e-12);  // node 0, no traction there
-  EXPECT_FALSE(scene->loads_vanish(0.0, 0.1));
+  EXPECT_FALSE(scene->model->loads_vanish(0.0, 0.1));
 }
 
 TEST(SceneFe, DirichletFixesAndDrivesNodes) {
@@ -417,13 +387,13 @@ TEST(SceneFe, DirichletFixesAndDrivesNodes) {
       "[[dirichlet]]\nnodes = \"plate.right\"\ndisplacement = [0.2, 0.0]\ncomponents = \"x\"\n"
       "time_function = { type = \"ramp\", start = 0.0, end = 2.0 }\n";
   const auto scene = load_scene(dir.write("plate.toml", plate));
-  const System& s = *scene->system;
+  const System& s = scene->system();
   // left: 3 nodes x 2; bottom: 3 nodes y, one of them already fixed (the
   // shared corner); right: 3 nodes x.
   EXPECT_EQ(s.prescribed().size(), 6u + 2u + 3u);
-  ASSERT_EQ(scene->dirichlet.size(), 3u);
-  EXPECT_EQ(scene->dirichlet[0].n_dofs, 6);
-  EXPECT_EQ(scene->dirichlet[1].n_dofs, 2);
+  ASSERT_EQ(scene->model->dirichlet().size(), 3u);
+  EXPECT_EQ(scene->model->dirichlet()[0].n_dofs, 6);
+  EXPECT_EQ(scene->model->dirichlet()[1].n_dofs, 2);
   const int corner = 2;  // node (nx, 0): right end of the bottom edge
   for (const auto& p : s.prescribed()) {
     if (p.dof != 2 * corner) continue;
@@ -446,7 +416,7 @@ TEST(SceneFe, GravityWeighsFreeBodyNodes) {
       "material = { young = 10.0, poisson = 0.3, density = 1.5 }\n"
       "[[dirichlet]]\nnodes = \"plate.left\"\nfixed = true\n";
   const auto scene = load_scene(dir.write("plate.toml", plate));
-  const System& s = *scene->system;
+  const System& s = scene->system();
   // 6 nodes, 2 fixed: 2 elements + 4 dead loads. V = -sum m_A g y_A = 0 at y = 0 rows.
   EXPECT_EQ(s.potentials().size(), 2u + 4u);
   Vec q = s.initial_positions();
@@ -460,12 +430,12 @@ TEST(SceneFe, GravityWeighsFreeBodyNodes) {
 TEST(SceneFe, LoadFreeIntervalsFollowTheTimeFunctions) {
   TempDir dir;
   const auto scene = load_scene(dir.write("t.toml", kValid + kTorque));
-  EXPECT_FALSE(scene->loads_vanish(0.0, 0.01));
-  EXPECT_FALSE(scene->loads_vanish(0.04, 0.05));
-  EXPECT_TRUE(scene->loads_vanish(0.05, 0.06));
-  EXPECT_TRUE(scene->loads_vanish(-1.0, 0.0));
+  EXPECT_FALSE(scene->model->loads_vanish(0.0, 0.01));
+  EXPECT_FALSE(scene->model->loads_vanish(0.04, 0.05));
+  EXPECT_TRUE(scene->model->loads_vanish(0.05, 0.06));
+  EXPECT_TRUE(scene->model->loads_vanish(-1.0, 0.0));
   const auto without = load_scene(dir.write("u.toml", kValid));
-  EXPECT_TRUE(without->loads_vanish(0.0, 1.0));
+  EXPECT_TRUE(without->model->loads_vanish(0.0, 1.0));
 }
 
 // The recorder on a loaded run: energy error over the load-free part only,
@@ -473,13 +443,14 @@ TEST(SceneFe, LoadFreeIntervalsFollowTheTimeFunctions) {
 TEST(SceneFe, RecorderSplitsLoadedAndLoadFreeIntervals) {
   TempDir dir;
   const auto scene = load_scene(dir.write("t.toml", kTime + kRings + kTorque));
-  const System& s = *scene->system;
-  auto stepper = make_stepper("em", s, scene->newton, scene->scheme_settings);
+  const System& s = scene->system();
+  auto stepper = make_stepper("em", s, scene->settings.schemes);
   State st = initial_state(s);
   Recorder rec(s, st);
-  rec.set_load_free_test([&](double a, double b) { return scene->loads_vanish(a, b); });
-  const RunOutcome out = integrate(
-      *stepper, st, scene->time, [&](const State& x, const AcceptedStep& a) { rec.observe(x, a); });
+  rec.set_load_free_test([&](double a, double b) { return scene->model->loads_vanish(a, b); });
+  const RunOutcome out =
+      integrate(*stepper, st, scene->settings.time,
+                [&](const State& x, const AcceptedStep& a) { rec.observe(x, a); });
   ASSERT_TRUE(out.ok) << out.message;
   EXPECT_TRUE(rec.has_external_work());
   EXPECT_GT(rec.last().external_work, 0.0);
@@ -525,40 +496,73 @@ TEST(ExamplesFe, PlateWithHoleImportsItsGmshMesh) {
   // The body comes from examples/meshes/plate_with_hole.msh (gmsh wrote it):
   // 166 quadrilaterals; the physical curves are the sets the scene uses.
   const auto scene = load_scene(example("plate_with_hole"));
-  ASSERT_EQ(scene->bodies.size(), 1u);
-  EXPECT_EQ(scene->bodies[0].geometry.n_elements(), 166);
-  EXPECT_EQ(scene->system->n_dofs(), 2 * scene->bodies[0].geometry.n_nodes());
-  EXPECT_FALSE(scene->system->prescribed().empty());  // "plate.left" clamped
-  EXPECT_EQ(scene->system->loads().size(), 1u);       // traction on "plate.right"
+  ASSERT_EQ(scene->model->bodies().size(), 1u);
+  EXPECT_EQ(scene->model->bodies()[0].mesh.n_elements(), 166);
+  EXPECT_EQ(scene->system().n_dofs(), 2 * scene->model->bodies()[0].mesh.n_nodes());
+  EXPECT_FALSE(scene->system().prescribed().empty());  // "plate.left" clamped
+  EXPECT_EQ(scene->system().loads().size(), 1u);       // traction on "plate.right"
 }
 
 TEST(ExamplesFe, RingImpactIsThePapersImpact) {
   const auto scene = load_scene(example("ring_impact"));
-  EXPECT_EQ(scene->name, "ring_impact");
-  EXPECT_EQ(scene->scheme, "em");
-  EXPECT_DOUBLE_EQ(scene->time.dt, 0.01);
-  EXPECT_DOUBLE_EQ(scene->time.t_end, 20.0);
+  EXPECT_EQ(scene->settings.name, "ring_impact");
+  EXPECT_EQ(scene->settings.scheme, "em");
+  EXPECT_DOUBLE_EQ(scene->settings.time.dt, 0.01);
+  EXPECT_DOUBLE_EQ(scene->settings.time.t_end, 20.0);
   EXPECT_TRUE(scene->warnings.empty());
   // Outer surfaces 120 apart along x, right ring 20 higher, speeds 10 each.
   const auto api = test_systems::ring_impact(120.0, 10.0, 20.0, 64, 1, 47.0, 50.0);
-  expect_same_system(*scene->system, *api.system);
-  const State st = initial_state(*scene->system);
-  const Quantities q = measure(*scene->system, st.q, st.v, 0.0);
+  expect_same_system(scene->system(), *api.system);
+  const State st = initial_state(scene->system());
+  const Quantities q = measure(scene->system(), st.q, st.v, 0.0);
   EXPECT_GT(std::abs(q.angular_momentum[0]), 100.0);  // off-centre
-  EXPECT_TRUE(scene->tolerances.energy_rel.has_value());
+  EXPECT_TRUE(scene->settings.tolerances.energy_rel.has_value());
 }
 
 TEST(ExamplesFe, BearingIsThePapersBearing) {
   const auto scene = load_scene(example("bearing"));
   const auto api = test_systems::bearing();
-  expect_same_system(*scene->system, *api.system);
-  ASSERT_TRUE(scene->statics.enabled);
-  ASSERT_EQ(scene->statics.hold_rotation.size(), 1u);
-  EXPECT_EQ(scene->statics.hold_rotation[0], api.inner_surface);
-  EXPECT_EQ(scene->statics.hold_names[0], "inner_ring.inner");
-  ASSERT_EQ(scene->loads.size(), 1u);
-  EXPECT_TRUE(scene->loads_vanish(0.5, 2.0));
-  EXPECT_FALSE(scene->loads_vanish(0.0, 0.5));
+  expect_same_system(scene->system(), *api.system);
+  ASSERT_TRUE(scene->settings.statics.enabled);
+  ASSERT_EQ(scene->settings.statics.hold_rotation.size(), 1u);
+  EXPECT_EQ(scene->model->nodes(scene->settings.statics.hold_rotation[0]), api.inner_surface);
+  EXPECT_EQ(scene->settings.statics.hold_rotation[0], "inner_ring.inner");
+  ASSERT_EQ(scene->model->loads().size(), 1u);
+  EXPECT_TRUE(scene->model->loads_vanish(0.5, 2.0));
+  EXPECT_FALSE(scene->model->loads_vanish(0.0, 0.5));
+}
+
+// A scene carries the settings of every scheme: [scheme.ida] and
+// [scheme.galpha] are read whatever the scheme, without a warning; the flat
+// keys of old still work, and warn (naming the table) when unused.
+TEST(SceneFe, EverySchemeKeepsItsOwnTable) {
+  TempDir dir;
+  auto scene = load_scene(dir.write(
+      "t.toml", kTime + kRings +
+                    "[scheme]\nname = \"em\"\nlocate_impacts = false\ngap_tolerance = 1e-9\n"
+                    "[scheme.ida]\nrtol = 1e-5\natol = 1e-6\nmax_order = 2\n"
+                    "[scheme.galpha]\nrho_inf = 0.8\n"));
+  EXPECT_TRUE(scene->warnings.empty()) << scene->warnings.front();
+  const SchemeSettings& s = scene->settings.schemes;
+  EXPECT_EQ(s.ida.rtol, 1e-5);
+  EXPECT_EQ(s.ida.atol, 1e-6);
+  EXPECT_EQ(s.ida.max_order, 2);
+  EXPECT_EQ(s.galpha.rho_inf, 0.8);
+  EXPECT_EQ(s.galpha.alpha_f, GeneralizedAlphaSettings::chung_hulbert(0.8).alpha_f);
+  EXPECT_EQ(s.contact.impact, ImpactTreatment::None);
+  EXPECT_EQ(s.contact.gap_tolerance, 1e-9);
+  // The stepper made from them has them (ida: the gap tolerance is the shared one).
+  auto ida = make_stepper("ida", scene->system(), s);
+  EXPECT_EQ(dynamic_cast<const IdaStepper&>(*ida).settings().max_order, 2);
+  EXPECT_EQ(dynamic_cast<const IdaStepper&>(*ida).gap_tolerance(), 1e-9);
+  auto galpha = make_stepper("galpha", scene->system(), s);
+  EXPECT_EQ(dynamic_cast<const GeneralizedAlphaStepper&>(*galpha).settings().rho_inf, 0.8);
+
+  scene = load_scene(dir.write("u.toml", kTime + kRings + "[scheme]\nrho_inf = 0.5\n"));
+  EXPECT_EQ(scene->settings.schemes.galpha.rho_inf, 0.5);
+  ASSERT_EQ(scene->warnings.size(), 1u);
+  EXPECT_NE(scene->warnings[0].find("only used by scheme galpha, not em"), std::string::npos);
+  EXPECT_NE(scene->warnings[0].find("scheme.galpha.rho_inf"), std::string::npos);
 }
 
 // Every scene in examples/ loads cleanly: no errors, no warnings.
@@ -582,16 +586,16 @@ TEST(ExamplesFe, HertzIsTheTestsMediumMesh) {
   // the block tests/test_hertz.cpp maps by hand.
   const auto scene = load_scene(example("hertz"));
   const auto api = test_systems::hertz_contact(400, 16, 80, 40);
-  expect_same_system(*scene->system, *api.system);
-  EXPECT_TRUE(scene->static_only);
-  EXPECT_EQ(scene->statics.settings.increments, 4);
-  EXPECT_EQ(scene->statics.settings.load_time, 1.0);
-  ASSERT_EQ(scene->contacts.size(), 1u);
-  EXPECT_EQ(scene->contacts[0].slave, "cylinder.outer");
+  expect_same_system(scene->system(), *api.system);
+  EXPECT_TRUE(scene->settings.static_only);
+  EXPECT_EQ(scene->settings.statics.settings.increments, 4);
+  EXPECT_EQ(scene->settings.statics.settings.load_time, 1.0);
+  ASSERT_EQ(scene->model->contacts().size(), 1u);
+  EXPECT_EQ(scene->model->contacts()[0].slave, "cylinder.outer");
   // The prescribed push agrees with the test's at every increment.
   for (double t : {0.25, 0.5, 0.75, 1.0}) {
-    State a = initial_state(*scene->system), b = initial_state(*api.system);
-    for (const auto& p : scene->system->prescribed())
+    State a = initial_state(scene->system()), b = initial_state(*api.system);
+    for (const auto& p : scene->system().prescribed())
       if (p.position) a.q[p.dof] = p.position(t);
     for (const auto& p : api.system->prescribed())
       if (p.position) b.q[p.dof] = p.position(t);
@@ -607,352 +611,42 @@ TEST(ExamplesFe, BearingRollersIsTheTestsSystem) {
   const auto scene = load_scene(example("bearing_rollers"));
   const auto api =
       test_systems::bearing(1e4, 10, 48, 40, test_systems::BearingSupport::RadialRollers);
-  expect_same_system(*scene->system, *api.system);
-  EXPECT_TRUE(scene->system->prescribed().empty());
-  EXPECT_TRUE(scene->system->symmetry().rotation);
-  EXPECT_FALSE(scene->system->symmetry().translation);
-  EXPECT_EQ(scene->statics.hold_names.size(), 2u);
-  ASSERT_TRUE(scene->tolerances.angular_momentum_balance_rel.has_value());
-  EXPECT_EQ(*scene->tolerances.angular_momentum_balance_rel, 1e-8);
+  expect_same_system(scene->system(), *api.system);
+  EXPECT_TRUE(scene->system().prescribed().empty());
+  EXPECT_TRUE(scene->system().symmetry().rotation);
+  EXPECT_FALSE(scene->system().symmetry().translation);
+  EXPECT_EQ(scene->settings.statics.hold_rotation.size(), 2u);
+  ASSERT_TRUE(scene->settings.tolerances.angular_momentum_balance_rel.has_value());
+  EXPECT_EQ(*scene->settings.tolerances.angular_momentum_balance_rel, 1e-8);
 }
 
 TEST(ExamplesFe, PatchTestIsAStaticAnalysis) {
   const auto scene = load_scene(example("patch_test"));
-  EXPECT_TRUE(scene->static_only);
-  ASSERT_EQ(scene->bodies.size(), 2u);
-  EXPECT_EQ(scene->bodies[0].n_elements, 15);  // 5 x 3
-  EXPECT_EQ(scene->bodies[1].n_elements, 21);  // 7 x 3
-  ASSERT_EQ(scene->contacts.size(), 1u);
-  EXPECT_EQ(scene->contacts[0].candidates, 8);  // the upper block's bottom nodes
-  ASSERT_TRUE(scene->tolerances.contact_pressure_spread.has_value());
-  EXPECT_EQ(*scene->tolerances.contact_pressure_spread, 1e-8);
+  EXPECT_TRUE(scene->settings.static_only);
+  ASSERT_EQ(scene->model->bodies().size(), 2u);
+  EXPECT_EQ(scene->model->bodies()[0].info.n_elements, 15);  // 5 x 3
+  EXPECT_EQ(scene->model->bodies()[1].info.n_elements, 21);  // 7 x 3
+  ASSERT_EQ(scene->model->contacts().size(), 1u);
+  EXPECT_EQ(scene->model->contacts()[0].candidates, 8);  // the upper block's bottom nodes
+  ASSERT_TRUE(scene->settings.tolerances.contact_pressure_spread.has_value());
+  EXPECT_EQ(*scene->settings.tolerances.contact_pressure_spread, 1e-8);
   // Rollers at the base (y), the top pushed in y: 6 + 8 prescribed dofs.
-  EXPECT_EQ(scene->system->prescribed().size(), 14u);
+  EXPECT_EQ(scene->system().prescribed().size(), 14u);
 }
 
 TEST(ExamplesFe, FreeRingFliesFree) {
   const auto scene = load_scene(example("free_ring"));
-  const System& s = *scene->system;
-  ASSERT_EQ(scene->bodies.size(), 1u);
+  const System& s = scene->system();
+  ASSERT_EQ(scene->model->bodies().size(), 1u);
   EXPECT_EQ(s.n_nodes(), 128);
   EXPECT_EQ(s.n_unilateral(), 0);
   EXPECT_TRUE(s.prescribed().empty());
   EXPECT_TRUE(s.symmetry().translation && s.symmetry().rotation);
-  EXPECT_EQ(std::lround(scene->time.t_end / scene->time.dt), 1000);
+  EXPECT_EQ(std::lround(scene->settings.time.t_end / scene->settings.time.dt), 1000);
   const State st = initial_state(s);
   const Quantities q = measure(s, st.q, st.v, 0.0);
   EXPECT_GT(q.linear_momentum.norm(), 0.1);
   EXPECT_GT(std::abs(q.angular_momentum[0]), 1.0);
-}
-
-// --- the examples through the command ---------------------------------------------
-
-TEST(ExamplesFeRun, FreeRingConservesEverything) {
-  TempDir dir;
-  const Result r = emdae(
-      "run " + quote(example("free_ring")) + " --t-end 3 -q --out " + quote(dir / "o"), dir.path());
-  ASSERT_EQ(r.code, 0) << r.output;
-  const nlohmann::json s = read_json(dir / "o/summary.json");
-  EXPECT_EQ(s["status"], "ok");
-  EXPECT_EQ(s["steps"], 100);
-  EXPECT_LE(s["energy_rel_error_max"].get<double>(), 1e-9);
-  EXPECT_LE(s["linear_momentum_error_max"].get<double>(), 1e-10);
-  EXPECT_LE(s["angular_momentum_rel_error_max"].get<double>(), 1e-10);
-  EXPECT_FALSE(s.contains("contact_window"));                // no contact declared
-  EXPECT_FALSE(s.contains("energy_balance_rel_error_max"));  // no loads
-  EXPECT_EQ(read_lines(dir / "o/history.csv")[0],
-            "t,dt,kinetic,potential,total_energy,Lx,Ly,J,phi_max,newton_iterations,cutbacks");
-}
-
-TEST(ExamplesFeRun, RingImpactReportsTheContact) {
-  TempDir dir;
-  const Result r = emdae(
-      "run " + quote(example("ring_impact")) + " --set time.t_end=7 -q --out " + quote(dir / "o"),
-      dir.path());
-  ASSERT_EQ(r.code, 0) << r.output;
-  const nlohmann::json s = read_json(dir / "o/summary.json");
-  EXPECT_EQ(s["status"], "ok");
-  EXPECT_EQ(s["steps"], 700);
-  EXPECT_LE(s["energy_rel_error_max"].get<double>(), 1e-8);
-  EXPECT_LE(s["linear_momentum_error_max"].get<double>(), 1e-10);
-  EXPECT_LE(s["angular_momentum_rel_error_max"].get<double>(), 1e-10);
-  // The surfaces meet at t = 6.1 (closing speed 20 over 122).
-  ASSERT_TRUE(s["contact_window"].is_array()) << s;
-  EXPECT_NEAR(s["contact_window"][0].get<double>(), 6.11, 0.02);
-  EXPECT_NEAR(s["contact_window"][1].get<double>(), 7.0, 0.011);  // still in contact at the end
-  EXPECT_GE(s["active_contacts_max"].get<int>(), 1);
-  EXPECT_GE(s["contact_events"].get<long>(), 1);
-  // The contact issue's figures: active gaps within 1e-10, no node out of
-  // contact deeper than the gap tolerance (1e-10).
-  EXPECT_LE(s["gap_violation_max"].get<double>(), 1e-10);
-  EXPECT_LE(s["penetration_max"].get<double>(), 1e-10);
-  EXPECT_EQ(s["checks_pass"], true);
-
-  const auto lines = read_lines(dir / "o/history.csv");
-  const auto header = split(lines[0]);
-  const auto column = [&](const std::string& name) {
-    return static_cast<std::size_t>(std::find(header.begin(), header.end(), name) - header.begin());
-  };
-  ASSERT_LT(column("penetration_max"), header.size()) << lines[0];
-  EXPECT_EQ(header.back(), "penetration_max");
-  int rows_in_contact = 0;
-  for (std::size_t i = 1; i < lines.size(); ++i) {
-    const auto row = split(lines[i]);
-    ASSERT_EQ(row.size(), header.size());
-    if (std::stoi(row[column("active_contacts")]) > 0) ++rows_in_contact;
-  }
-  EXPECT_GT(rows_in_contact, 50);  // t = 6.11 .. 7
-  // The contact pressure of the last state: summary and table agree with the history.
-  const nlohmann::json& p = s["contact_pressure"]["rings"];
-  ASSERT_TRUE(p.is_object()) << s;
-  const int active = std::stoi(split(lines.back())[column("active_contacts")]);
-  EXPECT_EQ(p["active_nodes"], active);
-  EXPECT_GE(p["normal_force"].get<double>(), 0.0);
-  EXPECT_EQ(read_lines(dir / "o/contact.csv").size(), static_cast<std::size_t>(active) + 1);
-}
-
-TEST(ExamplesFeRun, BearingBalancesEnergyAndReportsStatics) {
-  TempDir dir;
-  const Result r =
-      emdae("run " + quote(example("bearing")) + " --set time.t_end=0.6 --out " + quote(dir / "o"),
-            dir.path());
-  ASSERT_EQ(r.code, 0) << r.output;
-  EXPECT_NE(r.output.find("statics"), std::string::npos) << r.output;
-  EXPECT_NE(r.output.find("energy balance error"), std::string::npos) << r.output;
-  const nlohmann::json s = read_json(dir / "o/summary.json");
-  EXPECT_EQ(s["status"], "ok");
-  EXPECT_EQ(s["steps"], 60);
-  ASSERT_TRUE(s["energy_balance_rel_error_max"].is_number()) << s;
-  EXPECT_LE(s["energy_balance_rel_error_max"].get<double>(), 1e-8);
-  EXPECT_GT(s["external_work"].get<double>(), 100.0);  // the torque spun the ring up
-  // After the torque (t > 0.5) the energy is conserved.
-  EXPECT_LE(s["energy_rel_error_max"].get<double>(), 1e-8);
-  EXPECT_NE(s["energy_note"].get<std::string>().find("1 load-free interval"), std::string::npos);
-  EXPECT_TRUE(s["angular_momentum_rel_error_max"].is_null());  // fixed, loaded
-  ASSERT_TRUE(s["angular_momentum_balance_rel_error_max"].is_number()) << s;
-  EXPECT_LE(s["angular_momentum_balance_rel_error_max"].get<double>(), 1e-8);
-
-  const nlohmann::json& st = s["statics"];
-  ASSERT_TRUE(st.is_object()) << s;
-  EXPECT_EQ(st["converged"], true);
-  EXPECT_GE(st["steps"].get<int>(), 1);
-  EXPECT_EQ(st["holds"], nlohmann::json::array({"inner_ring.inner"}));
-  ASSERT_EQ(st["holding_moments"].size(), 1u);
-  EXPECT_EQ(st["active_contacts"], 40);  // every slave node pressed
-  EXPECT_NE(st["message"].get<std::string>().find("ok"), std::string::npos);
-  EXPECT_EQ(s["active_contacts_max"], 40);
-  EXPECT_LE(s["gap_violation_max"].get<double>(), 1e-8);
-  EXPECT_EQ(s["checks_pass"], true);
-  const auto header = read_lines(dir / "o/history.csv")[0];
-  EXPECT_NE(header.find(",total_energy,external_work,"), std::string::npos) << header;
-}
-
-TEST(ExamplesFeRun, FailedStaticsEndsTheRunWithItsRecord) {
-  TempDir dir;
-  const Result r = emdae("run " + quote(example("bearing")) +
-                             " --set statics.max_steps=1 --set statics.tolerance=1e-14 -q --out " +
-                             quote(dir / "o"),
-                         dir.path());
-  EXPECT_EQ(r.code, 3) << r.output;
-  const nlohmann::json s = read_json(dir / "o/summary.json");
-  EXPECT_NE(s["status"].get<std::string>().find("static solve: not converged after 1 pseudo"),
-            std::string::npos)
-      << s;
-  EXPECT_EQ(s["steps"], 0);
-  EXPECT_EQ(s["statics"]["converged"], false);
-  EXPECT_EQ(s["statics"]["steps"], 1);
-  EXPECT_EQ(read_lines(dir / "o/history.csv").size(), 2u);  // header and the state reached
-}
-
-TEST(ExamplesFeRun, CheckShowsBodiesContactsLoadsAndStatics) {
-  TempDir dir;
-  const Result r = emdae("check " + quote(example("bearing")), dir.path());
-  ASSERT_EQ(r.code, 0) << r.output;
-  for (const char* s :
-       {"outer_ring: ring, 48 x 10 elements", "528 nodes, 480 elements", "E = 100000",
-        "dofs          1936 (1840 free, 96 prescribed)", "outer_ring.outer: fixed (x, y)",
-        "slave inner_ring.outer (40 segments", "master outer_ring.inner (48 segments)",
-        "torque 10000 on inner_ring.inner", "hat(0, 0.5)",
-        "holding the rotation of inner_ring.inner", "potentials    880: Q1 element 880"})
-    EXPECT_NE(r.output.find(s), std::string::npos) << s << " in\n" << r.output;
-  EXPECT_TRUE(fs::is_empty(dir.path()));
-}
-
-// --- static analyses through the command ------------------------------------------
-
-// The rows of contact.csv as name -> column values.
-struct ContactTable {
-  std::vector<std::string> header;
-  std::vector<std::vector<std::string>> rows;
-  double number(std::size_t row, const std::string& column) const {
-    const auto k =
-        static_cast<std::size_t>(std::find(header.begin(), header.end(), column) - header.begin());
-    EXPECT_LT(k, header.size()) << column;
-    return k < header.size() ? std::stod(rows[row][k]) : 0.0;
-  }
-};
-
-ContactTable read_contact_table(const std::string& path) {
-  const auto lines = read_lines(path);
-  ContactTable t;
-  if (lines.empty()) return t;
-  t.header = split(lines[0]);
-  for (std::size_t i = 1; i < lines.size(); ++i) t.rows.push_back(split(lines[i]));
-  return t;
-}
-
-TEST(ExamplesFeRun, PatchTestTransmitsAUniformPressure) {
-  TempDir dir;
-  const Result r =
-      emdae("run " + quote(example("patch_test")) + " --out " + quote(dir / "o"), dir.path());
-  ASSERT_EQ(r.code, 0) << r.output;
-  EXPECT_NE(r.output.find("analysis                    static, 1 load increment to t = 1"),
-            std::string::npos)
-      << r.output;
-  EXPECT_NE(r.output.find("check contact_pressure_spread pass"), std::string::npos) << r.output;
-  const nlohmann::json s = read_json(dir / "o/summary.json");
-  EXPECT_EQ(s["analysis"], "static");
-  EXPECT_EQ(s["status"], "ok");
-  EXPECT_FALSE(s.contains("energy_rel_error_max"));  // no time history to judge
-  EXPECT_FALSE(s.contains("steps"));
-  EXPECT_EQ(s["statics"]["converged"], true);
-  EXPECT_EQ(s["active_contacts"], 8);
-  const nlohmann::json& p = s["contact_pressure"]["interface"];
-  ASSERT_TRUE(p.is_object()) << s;
-  EXPECT_EQ(p["active_nodes"], 8);
-  EXPECT_LE(p["pressure_spread"].get<double>(), 1e-8);
-  EXPECT_NEAR(p["pressure_mean"].get<double>(), 1.0778858727840, 1e-9);  // = -sigma_yy
-  // Interface length 2: the normal force is the mean pressure times 2.
-  EXPECT_NEAR(p["normal_force"].get<double>(), 2 * p["pressure_mean"].get<double>(), 1e-9);
-  EXPECT_EQ(s["checks"]["contact_pressure_spread"]["result"], "pass");
-  EXPECT_EQ(s["checks_pass"], true);
-
-  const ContactTable t = read_contact_table(dir / "o/contact.csv");
-  EXPECT_EQ(join(t.header), "pair,node,x,y,gap,pressure,weight,force");
-  ASSERT_EQ(t.rows.size(), 8u);  // one per slave node: the whole interface is active
-  const double p0 = t.number(0, "pressure");
-  for (std::size_t i = 0; i < t.rows.size(); ++i) {
-    EXPECT_EQ(t.rows[i][0], "interface");
-    EXPECT_NEAR(t.number(i, "pressure"), p0, 1e-8 * p0) << "row " << i;
-    EXPECT_NEAR(t.number(i, "y"), 0.99, 1e-12);  // equal blocks: half the push each
-    EXPECT_LE(std::abs(t.number(i, "gap")), 1e-12);
-    EXPECT_NEAR(t.number(i, "force"), t.number(i, "pressure") * t.number(i, "weight"), 1e-12);
-  }
-  // One history row per load increment after the initial state.
-  const auto history = read_lines(dir / "o/history.csv");
-  ASSERT_EQ(history.size(), 3u);
-  EXPECT_EQ(split(history[2])[0], "1");  // t: the load time
-  // The equilibrium's fields carry the pressure.
-  std::ifstream vtu(dir / "o/fields/step_0000001.vtu");
-  std::stringstream text;
-  text << vtu.rdbuf();
-  EXPECT_NE(text.str().find("Name=\"contact_pressure\""), std::string::npos);
-  std::ifstream report(dir / "o/report.html");
-  std::stringstream html;
-  html << report.rdbuf();
-  EXPECT_NE(html.str().find("static analysis"), std::string::npos);
-  EXPECT_NE(html.str().find("contact_pressure.interface.pressure_spread"), std::string::npos);
-}
-
-TEST(ExamplesFeRun, HertzMatchesPlaneStrainHertz) {
-  TempDir dir;
-  const Result r =
-      emdae("run " + quote(example("hertz")) + " -q --out " + quote(dir / "o"), dir.path());
-  ASSERT_EQ(r.code, 0) << r.output;
-  const nlohmann::json s = read_json(dir / "o/summary.json");
-  EXPECT_EQ(s["statics"]["increments"], 4);
-  EXPECT_EQ(read_lines(dir / "o/history.csv").size(), 6u);  // header, initial, 4 increments
-  // Half-width from the pressure's second moment, a = 2 sqrt(sum f x^2 / F),
-  // p0 = 2 F / (pi a), against plane-strain Hertz for the measured force.
-  const ContactTable t = read_contact_table(dir / "o/contact.csv");
-  ASSERT_GT(t.rows.size(), 10u);
-  double force = 0.0, m2 = 0.0;
-  for (std::size_t i = 0; i < t.rows.size(); ++i) {
-    const double f = t.number(i, "force"), x = t.number(i, "x");
-    EXPECT_GT(f, 0.0);
-    force += f;
-    m2 += f * x * x;
-  }
-  EXPECT_NEAR(force, s["contact_pressure"]["hertz"]["normal_force"].get<double>(), 1e-12);
-  const double pi = std::acos(-1.0), young = 1000.0, nu = 0.3, radius = 1.0;
-  const double a = 2.0 * std::sqrt(m2 / force), p0 = 2.0 * force / (pi * a);
-  const double e_star = young / (2 * (1 - nu * nu));
-  const double a_hertz = std::sqrt(4 * force * radius / (pi * e_star));
-  const double p0_hertz = 2 * force / (pi * a_hertz);
-  std::printf(
-      "hertz scene: %zu nodes, F %.5f, a %.5f (Hertz %.5f, %+.2f %%), p0 %.4f (Hertz "
-      "%.4f, %+.2f %%)\n",
-      t.rows.size(), force, a, a_hertz, 100 * (a / a_hertz - 1), p0, p0_hertz,
-      100 * (p0 / p0_hertz - 1));
-  EXPECT_LE(std::abs(a / a_hertz - 1), 0.03);
-  EXPECT_LE(std::abs(p0 / p0_hertz - 1), 0.03);
-  EXPECT_EQ(s["checks_pass"], true);
-}
-
-TEST(SceneFeRun, StaticSceneWritesPerIncrementAndRefusesCompareAndStudy) {
-  TempDir dir;
-  const std::string path =
-      dir.write("press.toml", with(kStatic, "load_time = 1.0", "load_time = 1.0\nincrements = 3"));
-  // The default folder of a static analysis: out/<name>-static.
-  const Result r = emdae("run " + quote(path) + " -q", dir.path());
-  ASSERT_EQ(r.code, 0) << r.output;
-  const std::string out = dir / "out/press-static";
-  const nlohmann::json s = read_json(out + "/summary.json");
-  EXPECT_EQ(s["analysis"], "static");
-  EXPECT_EQ(s["increments"], 3);
-  EXPECT_EQ(s["statics"]["increments"], 3);
-  const auto history = read_lines(out + "/history.csv");
-  ASSERT_EQ(history.size(), 5u);  // header, initial state, 3 increments
-  const auto header = split(history[0]);
-  for (std::size_t i = 1; i < history.size(); ++i)
-    EXPECT_NEAR(std::stod(split(history[i])[0]), (i - 1) / 3.0, 1e-15);  // t = k / 3
-  for (const char* f : {"step_0000000.vtu", "step_0000001.vtu", "step_0000003.vtu"})
-    EXPECT_TRUE(fs::exists(fs::path(out) / "fields" / f)) << f;
-  EXPECT_TRUE(fs::exists(out + "/contact.csv"));
-  EXPECT_TRUE(fs::exists(out + "/report.html"));
-
-  // Compare and study run schemes over time steps: a static analysis is bad input.
-  for (const std::string& cmd : {"compare " + quote(path) + " --schemes em,midpoint",
-                                 "study " + quote(path) + " --schemes em"}) {
-    const fs::path cwd = dir.path() / cmd.substr(0, cmd.find(' '));
-    fs::create_directories(cwd);
-    const Result refused = emdae(cmd, cwd);
-    EXPECT_EQ(refused.code, 2) << cmd << "\n" << refused.output;
-    EXPECT_NE(refused.output.find(path + ":1:1: key 'time'"), std::string::npos) << refused.output;
-    EXPECT_NE(refused.output.find("static analysis"), std::string::npos) << refused.output;
-    EXPECT_TRUE(fs::is_empty(cwd)) << cmd;
-  }
-  // check shows what the run will do.
-  const Result c = emdae("check " + quote(path), dir.path());
-  ASSERT_EQ(c.code, 0) << c.output;
-  EXPECT_NE(c.output.find("the equilibrium is the run (3 load increments to t = 1"),
-            std::string::npos)
-      << c.output;
-  EXPECT_EQ(c.output.find("dt = "), std::string::npos) << c.output;
-}
-
-TEST(SceneFeRun, StaticFailuresExitThreeAndFour) {
-  TempDir dir;
-  // The solve cannot converge in one pseudo step to 1e-14: exit 3, the record kept.
-  const std::string failing = dir.write(
-      "fails.toml",
-      with(kStatic, "load_time = 1.0", "load_time = 1.0\nmax_steps = 1\ntolerance = 1e-14"));
-  Result r = emdae("run " + quote(failing) + " -q --out " + quote(dir / "f"), dir.path());
-  EXPECT_EQ(r.code, 3) << r.output;
-  nlohmann::json s = read_json(dir / "f/summary.json");
-  EXPECT_EQ(s["statics"]["converged"], false);
-  EXPECT_NE(s["status"].get<std::string>().find("not converged after 1 pseudo"), std::string::npos)
-      << s;
-  EXPECT_EQ(read_lines(dir / "f/history.csv").size(), 2u);  // header and the initial state
-  // A pressure spread tighter than round-off: the run is fine, the check fails (exit 4).
-  const std::string strict =
-      dir.write("strict.toml", kStatic + "\n[tolerances]\ncontact_pressure_spread = 1e-300\n");
-  r = emdae("run " + quote(strict) + " -q --out " + quote(dir / "s"), dir.path());
-  EXPECT_EQ(r.code, 4) << r.output;
-  EXPECT_NE(r.output.find("check contact_pressure_spread failed"), std::string::npos) << r.output;
-  s = read_json(dir / "s/summary.json");
-  EXPECT_EQ(s["checks"]["contact_pressure_spread"]["result"], "fail");
-  EXPECT_EQ(s["status"], "ok");
 }
 
 }  // namespace

@@ -14,7 +14,8 @@ std::vector<std::string> history_columns(int dim, bool external_work, bool conta
   } else {
     c.insert(c.end(), {"Lx", "Ly", "Lz", "J", "Jx", "Jy", "Jz"});
   }
-  c.insert(c.end(), {"phi_max", "newton_iterations", "cutbacks"});
+  c.insert(c.end(), {"phi_max", "newton_iterations", "cutbacks", "energy_error",
+                     "linear_momentum_error", "angular_momentum_error"});
   if (contact)
     c.insert(c.end(),
              {"active_contacts", "contact_events", "gap_violation_max", "penetration_max"});
@@ -51,7 +52,8 @@ void HistoryWriter::write(const Sample& s) {
     std::fprintf(file_, ",%.17g", q.angular_momentum.norm());
     for (int d = 0; d < 3; ++d) std::fprintf(file_, ",%.17g", q.angular_momentum[d]);
   }
-  std::fprintf(file_, ",%.17g,%d,%d", q.phi_max, s.newton_iterations, s.cutbacks);
+  std::fprintf(file_, ",%.17g,%d,%d,%.17g,%.17g,%.17g", q.phi_max, s.newton_iterations, s.cutbacks,
+               s.energy_error, s.linear_momentum_error, s.angular_momentum_error);
   if (contact_)
     std::fprintf(file_, ",%d,%d,%.17g,%.17g", s.active_contacts, s.contact_events, s.gap_violation,
                  s.penetration);

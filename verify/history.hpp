@@ -3,11 +3,16 @@
 // killed or crashes keeps everything up to its last accepted step.
 //
 // Columns (full precision, %.17g):
-//   2D: t,dt,kinetic,potential,total_energy,Lx,Ly,J,phi_max,newton_iterations,cutbacks
+//   2D: t,dt,kinetic,potential,total_energy,Lx,Ly,J,phi_max,newton_iterations,
+//       cutbacks,energy_error,linear_momentum_error,angular_momentum_error
 //   3D: t,dt,kinetic,potential,total_energy,Lx,Ly,Lz,J,Jx,Jy,Jz,phi_max,
-//       newton_iterations,cutbacks
+//       newton_iterations,cutbacks,energy_error,linear_momentum_error,
+//       angular_momentum_error
 // In 2D J is the (signed) out-of-plane angular momentum; in 3D J = |J| and
-// Jx, Jy, Jz its components. With external loads (or an external-work hook)
+// Jx, Jy, Jz its components. The three errors are the Recorder's of the
+// row (Sample::energy_error, ...): their maxima are the summary's figures
+// (the energy error: energy_balance_rel_error_max with loads), whether or
+// not the system conserves the momentum in question. With external loads (or an external-work hook)
 // a column external_work (cumulative W) follows total_energy. With contact
 // four columns end the row: active_contacts, contact_events (of the step
 // that led to the row), gap_violation_max (max |Phi| over the active

@@ -1,12 +1,15 @@
 // The pieces of emdae's self-contained HTML pages, shared by the pages of
-// verify/: the run report and the comparison (report.cpp) and the study
-// (study.cpp). Internal to verify/; defined in report.cpp.
+// verify/: the run report (report.cpp), the comparison (compare.cpp) and the
+// study (study.cpp). Internal to verify/; defined in report.cpp and, for the
+// plots, plot.cpp.
 //
 // A page is page_head() + sections + page_foot(); figures are drawn by
 // gnuplot's SVG terminal and inlined (see report.hpp for what happens when
 // gnuplot is missing); files are written atomically.
 #pragma once
 
+#include <filesystem>
+#include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
 #include <vector>
@@ -15,6 +18,8 @@
 #include "verify/report.hpp"
 
 namespace emdae::report_detail {
+
+using Json = nlohmann::ordered_json;
 
 /// One curve: y against x (time for the run's plots).
 struct Series {
@@ -58,5 +63,61 @@ std::string figures_html(const std::vector<Figure>& figures, const GnuplotStatus
                          const std::string& data_file = "history.csv");
 /// The caption's sentence on zeros drawn at the bottom of a log axis.
 std::string floor_caption(bool log);
+
+// --- what report.cpp shares with compare.cpp ------------------------------------
+
+// history.csv, column-major, addressed by header name.
+struct Table {
+  std::vector<std::string> names;
+  std::vector<std::vector<double>> columns;
+
+  const std::vector<double>* column(const std::string& name) const {
+    const auto it = std::find(names.begin(), names.end(), name);
+    return it == names.end() ? nullptr : &columns[static_cast<std::size_t>(it - names.begin())];
+  }
+  std::size_t rows() const { return columns.empty() ? 0 : columns.front().size(); }
+};
+
+/// Throws std::runtime_error naming the file and line. A short last line (a
+/// run killed while writing it) is dropped rather than refused.
+Table read_history(const std::filesystem::path& path);
+
+// One run's curves, read from its history: the errors are the recorder's
+// own per-row figures (Recorder: Sample::energy_error, ...), so that a
+// plot's peak is the summary's figure and nothing is computed twice.
+struct RunCurves {
+  std::vector<double> t;
+  std::vector<Series> energies;  // kinetic, potential, total (, total - work)
+  Series energy_error;
+  bool energy_balance = false;  // loads: H - H0 - W is the error
+  Series linear_error, angular_error;
+  std::vector<Series> constraint;  // phi_max, and gap_violation_max with contact
+  Series newton, cutbacks;
+  std::vector<Series> contact;  // active contact nodes, when recorded
+  std::vector<Series> events;   // contact events (impacts, releases) per step
+  std::vector<Series> penetration;
+};
+
+RunCurves derive_curves(const Table& h);
+
+// Which momentum errors a run's summary reports (the others are not
+// conserved by its system), and why not.
+struct MomentumFigures {
+  bool linear = false, angular = false;
+  std::string linear_note, angular_note;
+};
+
+MomentumFigures momentum_figures(const Json& summary);
+
+/// A check's result as a coloured mark ("pass", "fail", "skipped").
+std::string mark(const std::string& result);
+/// A summary value as a table cell's text.
+std::string format_value(const Json& v);
+/// The number under `key` of summary.json, if it has one.
+std::optional<double> find_number(const Json& summary, const std::string& key);
+/// Figures whose every curve is zero get a note instead of an empty plot.
+void drop_zero_curves(std::vector<Figure>& figs);
+/// The contents of a file ("" when it cannot be read).
+std::string read_text(const std::filesystem::path& path);
 
 }  // namespace emdae::report_detail

@@ -95,8 +95,8 @@ Recorder::Recorder(const System& system, const State& initial, ExternalWork exte
   angular_scale_ = (j0 > 1e-12 * j_size) ? j0 : 0.0;
   impulse_ = Vec::Zero(q0.linear_momentum.size());
   angular_impulse_ = Vec::Zero(q0.angular_momentum.size());
-  last_ = initial_;
   update_maxima(initial_);
+  last_ = initial_;
 }
 
 const Sample& Recorder::observe(const State& state, const AcceptedStep& step) {
@@ -187,7 +187,7 @@ void Recorder::track_balance(const AcceptedStep& step, const Sample& s) {
   angular_size_max_ = std::max(angular_size_max_, q.angular_momentum.norm());
 }
 
-void Recorder::update_maxima(const Sample& s) {
+void Recorder::update_maxima(Sample& s) {
   const Quantities& q0 = initial_.quantities;
   const Quantities& q = s.quantities;
   // The energy balance: what the loads put in since t_0 is not an error.
@@ -199,11 +199,14 @@ void Recorder::update_maxima(const Sample& s) {
     balance_scale_ = std::max(
         {balance_scale_, energy_scale_, q.kinetic + std::abs(q.potential), std::abs(work)});
   const double scale = has_loads_ ? balance_scale_ : energy_scale_;
-  keep_max(balance_error_max_, scale > 0 ? drift / scale : drift);
-  if (!has_loads_) energy_error_max_ = balance_error_max_;
-  keep_max(linear_error_max_, (q.linear_momentum - q0.linear_momentum).norm());
+  s.energy_error = scale > 0 ? drift / scale : drift;
+  s.linear_momentum_error = (q.linear_momentum - q0.linear_momentum).norm();
   const double dj = (q.angular_momentum - q0.angular_momentum).norm();
-  keep_max(angular_error_max_, angular_scale_ > 0 ? dj / angular_scale_ : dj);
+  s.angular_momentum_error = angular_scale_ > 0 ? dj / angular_scale_ : dj;
+  keep_max(balance_error_max_, s.energy_error);
+  if (!has_loads_) energy_error_max_ = balance_error_max_;
+  keep_max(linear_error_max_, s.linear_momentum_error);
+  keep_max(angular_error_max_, s.angular_momentum_error);
   keep_max(constraint_max_, q.phi_max);
   if (s.step == 0) angular_size_max_ = q.angular_momentum.norm();
 }

@@ -61,6 +61,12 @@ struct Sample {
   int newton_iterations = 0;
   int cutbacks = 0;            // failed attempts before this step was accepted
   double external_work = 0.0;  // cumulative W_ext(t); 0 without loads or hook
+  // The errors of this state, as the maxima of the run take them: the energy
+  // (balance) error |H - H_0 - (W - W_0)| / scale (absolute when the scale
+  // is zero), |L - L_0|, and |J - J_0| / |J_0| (absolute when J_0 ~ 0).
+  double energy_error = 0.0;
+  double linear_momentum_error = 0.0;
+  double angular_momentum_error = 0.0;
   // Contact (0 without unilateral constraints).
   int active_contacts = 0;     // active candidates
   int contact_events = 0;      // located impacts and releases in the step that led here
@@ -151,7 +157,8 @@ class Recorder {
   long cutbacks() const { return cutbacks_; }
 
  private:
-  void update_maxima(const Sample& s);
+  /// Sets the errors of `s` and takes them into the maxima.
+  void update_maxima(Sample& s);
   void measure_contact(const State& state, Sample& s);
   void track_load_free(const Sample& previous, const Sample& s);
   void track_balance(const AcceptedStep& step, const Sample& s);

@@ -1,169 +1,29 @@
 #include "verify/report.hpp"
 
-#include <fcntl.h>
 #include <fmt/format.h>
-#include <spawn.h>
-#include <sys/wait.h>
-#include <unistd.h>
 
 #include <algorithm>
-#include <cerrno>
 #include <cmath>
-#include <cstdio>
-#include <cstdlib>
-#include <cstring>
-#include <ctime>
 #include <filesystem>
 #include <fstream>
 #include <limits>
-#include <map>
 #include <optional>
 #include <sstream>
 #include <stdexcept>
 
 #include "verify/page.hpp"
 
-extern char** environ;
-
 namespace emdae {
 
 // Not an anonymous namespace: verify/page.hpp declares the helpers that the
-// study page (study.cpp) shares; the rest are this file's own.
+// other pages (compare.cpp, study.cpp) share; the rest are this file's own.
 namespace report_detail {
 
 namespace fs = std::filesystem;
-using Json = nlohmann::ordered_json;
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
-// More points than this per curve add file size, not information, at the
-// width of a figure.
-constexpr std::size_t kMaxPoints = 2000;
-
-// --- small helpers ----------------------------------------------------------------
-
-std::string html_escape(const std::string& s) {
-  std::string out;
-  out.reserve(s.size());
-  for (char c : s) {
-    switch (c) {
-      case '&':
-        out += "&amp;";
-        break;
-      case '<':
-        out += "&lt;";
-        break;
-      case '>':
-        out += "&gt;";
-        break;
-      case '"':
-        out += "&quot;";
-        break;
-      case '\'':
-        out += "&#39;";
-        break;
-      default:
-        out += c;
-    }
-  }
-  return out;
-}
-
-// A gnuplot single-quoted string: the only escape is '' for '.
-std::string gp_quote(const std::string& s) {
-  std::string out = "'";
-  for (char c : s) out += (c == '\'') ? std::string("''") : std::string(1, c);
-  return out + "'";
-}
-
-std::string sci(double x) {
-  if (std::isnan(x)) return "NaN";
-  if (std::isinf(x)) return x > 0 ? "inf" : "-inf";
-  return fmt::format("{:.3e}", x);
-}
-
-std::string read_text(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::ostringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
-
-// A private scratch folder for gnuplot's inputs and outputs, removed with
-// everything in it, so that nothing but the report lands in the run folder.
-class ScratchFolder {
- public:
-  ScratchFolder() {
-    std::string pattern = (fs::temp_directory_path() / "emdae-plot-XXXXXX").string();
-    if (!::mkdtemp(pattern.data()))
-      throw std::runtime_error(std::string("cannot create a scratch folder for gnuplot: ") +
-                               std::strerror(errno));
-    path_ = pattern;
-  }
-  ~ScratchFolder() {
-    std::error_code ec;
-    fs::remove_all(path_, ec);
-  }
-  ScratchFolder(const ScratchFolder&) = delete;
-  ScratchFolder& operator=(const ScratchFolder&) = delete;
-  fs::path operator/(const std::string& name) const { return path_ / name; }
-
- private:
-  fs::path path_;
-};
-
-std::string gnuplot_program() {
-  const char* env = std::getenv("EMDAE_GNUPLOT");
-  return (env && *env) ? env : "gnuplot";
-}
-
-// Runs argv (no shell: paths need no quoting) with stdout and stderr going
-// to `log`. Returns the exit status, or -1 with `why` when it could not run.
-int run_program(const std::vector<std::string>& argv, const fs::path& log, std::string& why) {
-  posix_spawn_file_actions_t actions;
-  posix_spawn_file_actions_init(&actions);
-  posix_spawn_file_actions_addopen(&actions, STDIN_FILENO, "/dev/null", O_RDONLY, 0);
-  posix_spawn_file_actions_addopen(&actions, STDOUT_FILENO, log.c_str(),
-                                   O_WRONLY | O_CREAT | O_TRUNC, 0644);
-  posix_spawn_file_actions_adddup2(&actions, STDOUT_FILENO, STDERR_FILENO);
-  std::vector<char*> args;
-  for (const auto& a : argv) args.push_back(const_cast<char*>(a.c_str()));
-  args.push_back(nullptr);
-  pid_t pid = 0;
-  const int rc = ::posix_spawnp(&pid, args[0], &actions, nullptr, args.data(), environ);
-  posix_spawn_file_actions_destroy(&actions);
-  if (rc != 0) {
-    why = fmt::format("cannot run '{}': {}", argv[0], std::strerror(rc));
-    return -1;
-  }
-  int status = 0;
-  while (::waitpid(pid, &status, 0) < 0) {
-    if (errno != EINTR) {
-      why = std::string("waitpid: ") + std::strerror(errno);
-      return -1;
-    }
-  }
-  if (WIFEXITED(status)) {
-    // 127: the shell convention posix_spawnp may use for "not found".
-    if (WEXITSTATUS(status) == 127) why = fmt::format("cannot run '{}'", argv[0]);
-    return WEXITSTATUS(status);
-  }
-  why = fmt::format("'{}' was killed by signal {}", argv[0], WTERMSIG(status));
-  return -1;
-}
 
 // --- the history table --------------------------------------------------------------
-
-// history.csv, column-major, addressed by header name.
-struct Table {
-  std::vector<std::string> names;
-  std::vector<std::vector<double>> columns;
-
-  const std::vector<double>* column(const std::string& name) const {
-    const auto it = std::find(names.begin(), names.end(), name);
-    return it == names.end() ? nullptr : &columns[static_cast<std::size_t>(it - names.begin())];
-  }
-  std::size_t rows() const { return columns.empty() ? 0 : columns.front().size(); }
-};
 
 std::vector<std::string> split(const std::string& line, char sep) {
   std::vector<std::string> out;
@@ -205,42 +65,23 @@ Table read_history(const fs::path& path) {
   }
   return table;
 }
-
 // --- what is plotted ----------------------------------------------------------------
 
 // Series, Axis and Figure: verify/page.hpp.
 
-// One run's curves, derived from its history as the recorder derives the
-// summary's maxima, so that a plot's peak is the summary's figure.
-struct RunCurves {
-  std::vector<double> t;
-  std::vector<Series> energies;  // kinetic, potential, total (, total - work)
-  Series energy_error;
-  bool energy_relative = true;
-  bool energy_balance = false;  // loads: H - H0 - W is the error
-  std::optional<Series> linear_error, angular_error;
-  bool angular_relative = true;
-  std::string linear_note, angular_note;
-  std::vector<Series> constraint;  // phi_max and any further residual columns
-  Series newton, cutbacks;
-  std::vector<Series> contact;  // active contact nodes, when recorded
-  std::vector<Series> events;   // contact events (impacts, releases) per step
-  std::vector<Series> penetration;
-};
-
-bool starts_with(const std::string& s, const std::string& prefix) {
-  return s.compare(0, prefix.size(), prefix) == 0;
-}
-
-bool contains(const std::string& s, const std::string& part) {
-  return s.find(part) != std::string::npos;
+MomentumFigures momentum_figures(const Json& summary) {
+  const auto reported = [&summary](const char* key) {
+    return summary.contains(key) && !summary[key].is_null();
+  };
+  return {reported("linear_momentum_error_max"), reported("angular_momentum_rel_error_max"),
+          summary.value("linear_momentum_note", ""), summary.value("angular_momentum_note", "")};
 }
 
 std::vector<double> zeros_like(std::size_t n) {
   return std::vector<double>(n, 0.0);
 }
 
-RunCurves derive_curves(const Table& h, const Json& summary) {
+RunCurves derive_curves(const Table& h) {
   RunCurves c;
   const auto* t = h.column("t");
   if (!t) throw std::runtime_error("history has no column 't'");
@@ -250,67 +91,25 @@ RunCurves derive_curves(const Table& h, const Json& summary) {
     const auto* x = h.column(name);
     return x ? *x : std::vector<double>(n, kNaN);
   };
-  const auto series = [&c](const std::string& label, std::vector<double> y) {
-    return Series{label, c.t, std::move(y)};
+  const auto series = [&c, &col](const std::string& label, const std::string& column) {
+    return Series{label, c.t, col(column)};
   };
   if (n == 0) return c;
 
-  const auto kinetic = col("kinetic"), potential = col("potential");
-  const auto total = col("total_energy");
+  c.energies = {series("kinetic", "kinetic"), series("potential", "potential"),
+                series("total", "total_energy")};
   const auto* work = h.column("external_work");
-  c.energies = {series("kinetic", kinetic), series("potential", potential), series("total", total)};
   c.energy_balance = work != nullptr;
   if (work) {
+    const auto total = col("total_energy");
     std::vector<double> balance(n);
     for (std::size_t i = 0; i < n; ++i) balance[i] = total[i] - (*work)[i];
-    c.energies.push_back(series("total - external work", balance));
+    c.energies.push_back(Series{"total - external work", c.t, balance});
   }
-  // The recorder's energy scale: H_0 alone can vanish while the energy in
-  // play does not.
-  const double scale = std::max(std::abs(total[0]), kinetic[0] + std::abs(potential[0]));
-  c.energy_relative = scale > 0;
-  std::vector<double> e(n);
-  for (std::size_t i = 0; i < n; ++i) {
-    const double w = work ? (*work)[i] - (*work)[0] : 0.0;
-    const double drift = std::abs(total[i] - total[0] - w);
-    e[i] = c.energy_relative ? drift / scale : drift;
-  }
-  c.energy_error = series(c.energy_balance ? "energy balance error" : "energy error", e);
-
-  // Momenta: only where the summary says the system conserves them.
-  if (summary.contains("linear_momentum_error_max") &&
-      !summary["linear_momentum_error_max"].is_null()) {
-    std::vector<double> l(n, 0.0);
-    for (const char* name : {"Lx", "Ly", "Lz"}) {
-      const auto* x = h.column(name);
-      if (!x) continue;
-      for (std::size_t i = 0; i < n; ++i) l[i] += std::pow((*x)[i] - (*x)[0], 2);
-    }
-    for (auto& x : l) x = std::sqrt(x);
-    c.linear_error = series("linear momentum error", l);
-  }
-  c.linear_note = summary.value("linear_momentum_note", "");
-  if (summary.contains("angular_momentum_rel_error_max") &&
-      !summary["angular_momentum_rel_error_max"].is_null()) {
-    std::vector<double> d(n, 0.0);
-    double j0 = 0.0;
-    const bool three_d = h.column("Jx") != nullptr;
-    for (const char* name :
-         three_d ? std::vector<const char*>{"Jx", "Jy", "Jz"} : std::vector<const char*>{"J"}) {
-      const auto* x = h.column(name);
-      if (!x) continue;
-      j0 += (*x)[0] * (*x)[0];
-      for (std::size_t i = 0; i < n; ++i) d[i] += std::pow((*x)[i] - (*x)[0], 2);
-    }
-    j0 = std::sqrt(j0);
-    c.angular_note = summary.value("angular_momentum_note", "");
-    // The summary knows when J_0 is zero by symmetry and the error absolute.
-    c.angular_relative = j0 > 0 && !starts_with(c.angular_note, "absolute");
-    for (auto& x : d) x = c.angular_relative ? std::sqrt(x) / j0 : std::sqrt(x);
-    c.angular_error = series("angular momentum error", d);
-  } else {
-    c.angular_note = summary.value("angular_momentum_note", "");
-  }
+  c.energy_error =
+      series(c.energy_balance ? "energy balance error" : "energy error", "energy_error");
+  c.linear_error = series("linear momentum error", "linear_momentum_error");
+  c.angular_error = series("angular momentum error", "angular_momentum_error");
 
   // Counts of a step start with the first step: row 0 is the initial state.
   const auto per_step = [&c](const std::string& label, const std::vector<double>& y) {
@@ -321,231 +120,20 @@ RunCurves derive_curves(const Table& h, const Json& summary) {
     }
     return s;
   };
-  // Residual columns: phi_max first, then whatever else the history records
-  // on constraint residuals (velocity level, per kind).
-  for (std::size_t k = 0; k < h.names.size(); ++k) {
-    const std::string& name = h.names[k];
-    if (starts_with(name, "phi") || name == "gap_violation_max")
-      c.constraint.push_back(series(name, h.columns[k]));
-    else if (contains(name, "active"))
-      c.contact.push_back(series(name, h.columns[k]));
-    else if (name == "contact_events")
-      c.events.push_back(per_step(name, h.columns[k]));
-    else if (contains(name, "penetration"))
-      c.penetration.push_back(series(name, h.columns[k]));
-  }
-  std::stable_partition(c.constraint.begin(), c.constraint.end(),
-                        [](const Series& s) { return s.label == "phi_max"; });
+  // The residuals on position level, phi_max first; contact's columns.
+  for (const char* name : {"phi_max", "gap_violation_max"})
+    if (h.column(name)) c.constraint.push_back(series(name, name));
+  if (h.column("active_contacts"))
+    c.contact.push_back(series("active_contacts", "active_contacts"));
+  if (h.column("contact_events"))
+    c.events.push_back(per_step("contact_events", col("contact_events")));
+  if (h.column("penetration_max"))
+    c.penetration.push_back(series("penetration_max", "penetration_max"));
   c.newton = per_step("Newton iterations", col("newton_iterations"));
   const auto* cut = h.column("cutbacks");
   c.cutbacks = per_step("cut-backs", cut ? *cut : zeros_like(n));
   return c;
 }
-
-// --- gnuplot ------------------------------------------------------------------------------
-
-// Keeps at most kMaxPoints per curve. For errors and counts each bucket of
-// rows becomes its maximum (a NaN wins: a blow-up must show); for signed
-// curves (energies) its first row, which keeps their shape.
-Series reduce(const Series& s, bool keep_max) {
-  const std::size_t n = s.t.size();
-  if (n <= kMaxPoints) return s;
-  const std::size_t k = (n + kMaxPoints - 1) / kMaxPoints;
-  Series r{s.label, {}, {}, s.dashed};
-  for (std::size_t b = 0; b < n; b += k) {
-    const std::size_t e = std::min(n, b + k);
-    double y = s.y[b];
-    if (keep_max)
-      for (std::size_t i = b; i < e; ++i)
-        if (std::isnan(s.y[i]) || s.y[i] > y) {
-          y = s.y[i];
-          if (std::isnan(y)) break;
-        }
-    r.t.push_back(keep_max ? s.t[e - 1] : s.t[b]);
-    r.y.push_back(y);
-  }
-  // The last state is the run's end: always drawn.
-  if (r.t.back() != s.t.back()) {
-    r.t.push_back(s.t.back());
-    r.y.push_back(s.y.back());
-  }
-  return r;
-}
-
-bool finite(double x) {
-  return std::isfinite(x);
-}
-
-// The 'Tableau' colours, then the rest: distinguishable in print and by the
-// commonest colour-vision deficiencies.
-const char* kColours[] = {"#1f77b4", "#d62728", "#2ca02c", "#9467bd",
-                          "#ff7f0e", "#8c564b", "#e377c2", "#17becf"};
-
-struct Plot {
-  std::string svg;    // inline SVG, or empty
-  std::string error;  // why there is no SVG
-};
-
-// Prefixes every id (and every reference to one) so that several gnuplot
-// SVGs can live in one HTML page: each defines the same point symbols.
-std::string make_ids_unique(std::string svg, const std::string& prefix) {
-  const std::pair<const char*, std::string> swaps[] = {{"id='", "id='" + prefix},
-                                                       {"id=\"", "id=\"" + prefix},
-                                                       {"href='#", "href='#" + prefix},
-                                                       {"href=\"#", "href=\"#" + prefix},
-                                                       {"url(#", "url(#" + prefix}};
-  for (const auto& [from, to] : swaps) {
-    const std::string f = from;
-    for (std::size_t p = svg.find(f); p != std::string::npos; p = svg.find(f, p + to.size()))
-      svg.replace(p, f.size(), to);
-  }
-  return svg;
-}
-
-std::string inline_svg(const std::string& file_text, const Figure& fig) {
-  const std::size_t start = file_text.find("<svg");
-  if (start == std::string::npos) return {};
-  std::string svg = file_text.substr(start);
-  const std::string gp_title = "<title>Gnuplot</title>";
-  const std::size_t title = svg.find(gp_title);
-  if (title != std::string::npos)
-    svg.replace(title, gp_title.size(), "<title>" + html_escape(fig.title) + "</title>");
-  svg.replace(0, 4,
-              "<svg class=\"plot\" role=\"img\" aria-label=\"" + html_escape(fig.title) + "\"");
-  return make_ids_unique(svg, fig.id + "-");
-}
-
-// Lower end of a log axis: a decade below the smallest positive value, so
-// that zeros (drawn there) sit visibly under everything else.
-double log_floor(const Figure& fig) {
-  double lo = std::numeric_limits<double>::infinity();
-  for (const auto& s : fig.series)
-    for (double y : s.y)
-      if (finite(y) && y > 0) lo = std::min(lo, y);
-  if (fig.limit && *fig.limit > 0) lo = std::min(lo, *fig.limit);
-  if (!std::isfinite(lo)) return 1e-16;
-  return std::pow(10.0, std::floor(std::log10(lo)) - 1);
-}
-
-// A log x axis over less than a few decades gets gnuplot's decade tics
-// only, often a single one: label 1, 2 and 5 times the powers of ten.
-std::string log_x_tics(const Figure& fig, double lo, double hi) {
-  if (!fig.log_x) return {};
-  std::string out = "set logscale x 10\n";
-  if (hi > 1000 * lo) return out + "set format x '10^{%L}'\n";
-  std::string tics;
-  for (int e = static_cast<int>(std::floor(std::log10(lo))); e <= std::ceil(std::log10(hi)); ++e)
-    for (double m : {1.0, 2.0, 5.0}) {
-      const double x = m * std::pow(10.0, e);
-      if (x >= lo && x <= hi)
-        tics += fmt::format("{}'{:g}' {:.17g}", tics.empty() ? "" : ", ", x, x);
-    }
-  return out + "set xtics (" + tics + ")\n";
-}
-
-Plot draw(const Figure& fig, const ScratchFolder& scratch) {
-  Plot plot;
-  const bool log = fig.axis == Axis::Log;
-  const double floor = log ? log_floor(fig) : 0.0;
-  double t_lo = std::numeric_limits<double>::infinity(), t_hi = -t_lo;
-  double y_lo = t_lo, y_hi = -t_lo;
-  std::string plots;
-  std::size_t colour = 0;  // guides take none: a scheme keeps its colour across figures
-  for (std::size_t k = 0; k < fig.series.size(); ++k) {
-    const Series s = reduce(fig.series[k], fig.axis != Axis::Linear);
-    const std::string data_name = fmt::format("{}-{}.dat", fig.id, k);
-    std::ofstream data(scratch / data_name);
-    for (std::size_t i = 0; i < s.t.size(); ++i) {
-      if (fig.log_x && !(finite(s.t[i]) && s.t[i] > 0)) continue;
-      double y = s.y[i];
-      if (log && finite(y) && y < floor) y = floor;
-      // Gnuplot reads NaN as a gap in the line; it would refuse "inf".
-      if (!finite(y)) {
-        data << fmt::format("{:.17g} NaN\n", s.t[i]);
-        continue;
-      }
-      data << fmt::format("{:.17g} {:.17g}\n", s.t[i], y);
-      t_lo = std::min(t_lo, s.t[i]);
-      t_hi = std::max(t_hi, s.t[i]);
-      y_lo = std::min(y_lo, y);
-      y_hi = std::max(y_hi, y);
-    }
-    if (!data) return {"", "cannot write gnuplot data to the scratch folder"};
-    const std::string style = s.dashed ? "lines dt 2 lw 1.2 lc rgb '#555555'"
-                                       : fmt::format("{} lw 1.6 lc rgb '{}'",
-                                                     fig.axis == Axis::Steps ? "steps"
-                                                     : fig.points ? "linespoints pt 7 ps 0.7"
-                                                                  : "lines",
-                                                     kColours[colour++ % std::size(kColours)]);
-    plots += fmt::format("{}{} using 1:2 with {} title {} noenhanced", plots.empty() ? "" : ", ",
-                         gp_quote((scratch / data_name).string()), style, gp_quote(s.label));
-  }
-  // A log x axis (a study's step sizes) can show a single run: one point.
-  if (fig.log_x && t_hi >= t_lo) {
-    t_lo /= 1.3;
-    t_hi *= 1.3;
-  }
-  if (!(t_hi > t_lo)) return {"", "no finite values at two or more times: nothing to draw"};
-  if (fig.limit) {
-    plots += fmt::format(", {:.17g} with lines dt 2 lw 1.2 lc rgb '#555555' title {}", *fig.limit,
-                         gp_quote(fmt::format("tolerance {:g}", *fig.limit)));
-    y_lo = std::min(y_lo, *fig.limit);
-    y_hi = std::max(y_hi, *fig.limit);
-  }
-
-  std::string range;
-  if (log) {
-    const double lo = std::pow(10.0, std::floor(std::log10(y_lo)));
-    double hi = std::pow(10.0, std::ceil(std::log10(y_hi)));
-    if (!(hi > lo)) hi = lo * 100;
-    range = fmt::format("set logscale y 10\nset format y '10^{{%L}}'\nset yrange [{:g}:{:g}]\n", lo,
-                        hi);
-  } else {
-    if (fig.from_zero) {
-      y_lo = std::min(y_lo, 0.0);
-      y_hi = std::max(y_hi, 0.0);
-    }
-    // Room above and below, and a visible band when the curve is flat.
-    const double pad = (y_hi > y_lo) ? 0.05 * (y_hi - y_lo) : std::max(1.0, std::abs(y_hi)) * 0.5;
-    range = fmt::format("set yrange [{:.17g}:{:.17g}]\n", y_lo - pad, y_hi + pad);
-    // Counts: whole numbers on the axis, from zero.
-    if (fig.axis == Axis::Steps && y_lo >= 0)
-      range = fmt::format("set yrange [0:{:g}]\nset ytics {}\nset format y '%.0f'\n",
-                          std::ceil(y_hi * 1.1 + 0.5),
-                          y_hi <= 10   ? "1"
-                          : y_hi <= 50 ? "5"
-                                       : "autofreq");
-  }
-  const fs::path svg_path = scratch / (fig.id + ".svg");
-  const fs::path script_path = scratch / (fig.id + ".gp");
-  {
-    std::ofstream script(script_path);
-    script << "set encoding utf8\n"
-           << "set terminal svg size 640,330 dynamic enhanced font 'DejaVu Sans,11' "
-              "background '#ffffff'\n"
-           << "set output " << gp_quote(svg_path.string()) << "\n"
-           << "set xlabel " << gp_quote(fig.xlabel) << "\n"
-           << "set ylabel " << gp_quote(fig.ylabel) << "\n"
-           << "set border 3 lc rgb '#444444'\nset tics nomirror\n"
-           << "set grid lc rgb '#dddddd' lt 1 dt 1\n"
-           << "set key outside top center horizontal noenhanced\n"
-           << fmt::format("set xrange [{:.17g}:{:.17g}]\n", t_lo, t_hi)
-           << log_x_tics(fig, t_lo, t_hi) << range << "plot " << plots << "\n";
-    if (!script) return {"", "cannot write the gnuplot script to the scratch folder"};
-  }
-  std::string why;
-  const fs::path log_path = scratch / (fig.id + ".log");
-  const int rc = run_program({gnuplot_program(), script_path.string()}, log_path, why);
-  if (rc != 0) {
-    std::string message = read_text(log_path);
-    if (message.size() > 600) message = message.substr(0, 600) + " ...";
-    return {"", why.empty() ? fmt::format("gnuplot failed (exit {}): {}", rc, message) : why};
-  }
-  plot.svg = inline_svg(read_text(svg_path), fig);
-  if (plot.svg.empty()) plot.error = "gnuplot wrote no SVG";
-  return plot;
-}
-
 // --- HTML -----------------------------------------------------------------------------------
 
 const char* kStyle = R"(
@@ -622,62 +210,17 @@ std::string mark(const std::string& result) {
   if (result == "fail") return "<span class=\"mark fail\">&#10008; FAIL</span>";
   return "<span class=\"mark skipped\">&ndash; skipped</span>";
 }
-
-std::string figures_html(const std::vector<Figure>& figures, const GnuplotStatus& gnuplot,
-                         const std::string& data_file) {
-  std::string out;
-  if (!gnuplot.available)
-    out += "<p class=\"warning\">No plots: gnuplot is not available (" +
-           html_escape(gnuplot.detail) +
-           "). Install it (Debian: <code>apt-get install gnuplot-nox</code>) and run again; "
-           "the data are in " +
-           html_escape(data_file) + ".</p>\n";
-  out += "<div class=\"figures\">\n";
-  std::optional<ScratchFolder> scratch;
-  std::string scratch_error;
-  if (gnuplot.available) {
-    try {
-      scratch.emplace();
-    } catch (const std::exception& e) {
-      scratch_error = e.what();
-    }
-  }
-  for (const auto& fig : figures) {
-    out += fmt::format("<figure id=\"{}\">\n<h3>{}</h3>\n", fig.id, html_escape(fig.title));
-    std::string body;
-    if (!fig.note.empty() || fig.series.empty()) {
-      const std::string note = fig.note.empty() ? "nothing recorded" : fig.note;
-      body = "<p class=\"placeholder\">" + html_escape(note) + "</p>";
-    } else if (!gnuplot.available) {
-      body = "<p class=\"placeholder\">plot not drawn: gnuplot is not available</p>";
-    } else if (!scratch) {
-      body = "<p class=\"placeholder\">plot not drawn: " + html_escape(scratch_error) + "</p>";
-    } else {
-      const Plot plot = draw(fig, *scratch);
-      body = plot.svg.empty()
-                 ? "<p class=\"placeholder\">plot not drawn: " + html_escape(plot.error) + "</p>"
-                 : plot.svg;
-    }
-    out += body + "\n";
-    if (!fig.caption.empty()) out += "<figcaption>" + fig.caption + "</figcaption>\n";
-    out += "</figure>\n";
-  }
-  return out + "</div>\n";
-}
-
-std::string floor_caption(bool log) {
-  return log ? " Logarithmic axis: zeros (the initial state, errors below round-off) are drawn "
-               "at the bottom of the axis."
-             : "";
-}
-
 void drop_zero_curves(std::vector<Figure>& figs);
 
 // The figures of one run's report.
-std::vector<Figure> run_figures(const RunCurves& c, const Json& summary,
+std::vector<Figure> run_figures(const RunCurves& c, const Summary& summary,
                                 const std::optional<double>& energy_limit,
                                 const std::optional<double>& constraint_limit) {
   std::vector<Figure> figs;
+  // Relative or absolute: as the recorder measured (with loads, against the
+  // largest energy held, which is zero only when nothing ever moved).
+  const bool energy_relative = c.energy_balance || summary.energy_error_relative;
+  const bool angular_relative = summary.angular_momentum_error_relative;
   Figure energy{"energy",
                 "Energy",
                 "energy",
@@ -694,7 +237,7 @@ std::vector<Figure> run_figures(const RunCurves& c, const Json& summary,
 
   Figure err{"energy-error",
              c.energy_balance ? "Energy balance error" : "Energy error",
-             c.energy_relative ? "relative error" : "absolute error",
+             energy_relative ? "relative error" : "absolute error",
              Axis::Log,
              {c.energy_error},
              energy_limit,
@@ -703,7 +246,10 @@ std::vector<Figure> run_figures(const RunCurves& c, const Json& summary,
   err.caption = c.energy_balance ? "|H<sub>n</sub> &minus; H<sub>0</sub> &minus; "
                                    "W<sub>ext</sub>(t<sub>n</sub>)|"
                                  : "|H<sub>n</sub> &minus; H<sub>0</sub>|";
-  if (c.energy_relative) err.caption += " / max(|H<sub>0</sub>|, T<sub>0</sub> + |V<sub>0</sub>|)";
+  if (c.energy_balance)
+    err.caption += " / the largest energy held so far";
+  else if (energy_relative)
+    err.caption += " / max(|H<sub>0</sub>|, T<sub>0</sub> + |V<sub>0</sub>|)";
   err.caption += c.energy_balance
                      ? "; its maximum is the summary's energy_balance_rel_error_max (the "
                        "summary's energy_rel_error_max covers the load-free intervals only)."
@@ -713,30 +259,32 @@ std::vector<Figure> run_figures(const RunCurves& c, const Json& summary,
 
   Figure lin{
       "linear-momentum", "Linear momentum error", "|L - L_0|", Axis::Log, {}, std::nullopt, "", ""};
-  if (c.linear_error) {
-    lin.series = {*c.linear_error};
+  if (summary.linear_momentum_error_max) {
+    lin.series = {c.linear_error};
     lin.caption = "|L<sub>n</sub> &minus; L<sub>0</sub>| (absolute)." + floor_caption(true);
   } else {
-    lin.note = c.linear_note.empty() ? "not conserved by this system" : c.linear_note;
+    lin.note = summary.linear_momentum_note.empty() ? "not conserved by this system"
+                                                    : summary.linear_momentum_note;
   }
   figs.push_back(lin);
 
   Figure ang{"angular-momentum",
              "Angular momentum error",
-             c.angular_relative ? "|J - J_0| / |J_0|" : "|J - J_0|",
+             angular_relative ? "|J - J_0| / |J_0|" : "|J - J_0|",
              Axis::Log,
              {},
              std::nullopt,
              "",
              ""};
-  if (c.angular_error) {
-    ang.series = {*c.angular_error};
-    ang.caption = c.angular_relative
+  if (summary.angular_momentum_rel_error_max) {
+    ang.series = {c.angular_error};
+    ang.caption = angular_relative
                       ? "|J<sub>n</sub> &minus; J<sub>0</sub>| / |J<sub>0</sub>|, about the origin."
                       : "|J<sub>n</sub> &minus; J<sub>0</sub>| (absolute: J<sub>0</sub> = 0).";
     ang.caption += floor_caption(true);
   } else {
-    ang.note = c.angular_note.empty() ? "not conserved by this system" : c.angular_note;
+    ang.note = summary.angular_momentum_note.empty() ? "not conserved by this system"
+                                                     : summary.angular_momentum_note;
   }
   figs.push_back(ang);
 
@@ -744,7 +292,7 @@ std::vector<Figure> run_figures(const RunCurves& c, const Json& summary,
              c.constraint, constraint_limit,      "",        ""};
   // Without bilateral constraints phi_max is zero by construction: only the
   // contact residual is worth a line.
-  if (summary.value("constraints", 0) == 0) {
+  if (summary.constraints == 0) {
     phi.series.erase(std::remove_if(phi.series.begin(), phi.series.end(),
                                     [](const Series& s) { return s.label == "phi_max"; }),
                      phi.series.end());
@@ -979,13 +527,9 @@ std::string summary_table_html(const Json& summary) {
 
 // The first number whose key contains `part`, at the top level or one
 // object down (e.g. contact.penetration_max).
-std::optional<double> find_number(const Json& summary, const std::string& part) {
-  for (const auto& [key, value] : summary.items()) {
-    if (contains(key, part) && value.is_number()) return value.get<double>();
-    if (value.is_object())
-      for (const auto& [k, v] : value.items())
-        if (contains(k, part) && v.is_number()) return v.get<double>();
-  }
+// The number under `key` of summary.json, if it has one.
+std::optional<double> find_number(const Json& summary, const std::string& key) {
+  if (summary.contains(key) && summary[key].is_number()) return summary[key].get<double>();
   return std::nullopt;
 }
 
@@ -1002,27 +546,9 @@ std::string header_html(const ReportInfo& info, const std::string& what) {
          "</code></p>\n</header>\n";
   return out;
 }
-
 }  // namespace report_detail
 
 using namespace report_detail;
-
-GnuplotStatus probe_gnuplot() {
-  GnuplotStatus status;
-  try {
-    ScratchFolder scratch;
-    std::string why;
-    const fs::path log = scratch / "version.log";
-    const int rc = run_program({gnuplot_program(), "--version"}, log, why);
-    std::string text = read_text(log);
-    while (!text.empty() && (text.back() == '\n' || text.back() == '\r')) text.pop_back();
-    status.available = rc == 0;
-    status.detail = rc == 0 ? text : (why.empty() ? "'" + gnuplot_program() + "' failed" : why);
-  } catch (const std::exception& e) {
-    status.detail = e.what();
-  }
-  return status;
-}
 
 void write_report(const std::string& dir, const ReportInfo& info, const Summary& summary) {
   const Json json = to_json(summary);
@@ -1057,9 +583,9 @@ void write_report(const std::string& dir, const ReportInfo& info, const Summary&
     if (summary.static_analysis) {
       figures = static_figures(table, check_limit(json, "constraint"));
     } else {
-      const RunCurves curves = derive_curves(table, json);
+      const RunCurves curves = derive_curves(table);
       figures = run_figures(
-          curves, json,
+          curves, summary,
           check_limit(json, curves.energy_balance ? "energy_balance_rel" : "energy_rel"),
           check_limit(json, "constraint"));
     }
@@ -1086,203 +612,4 @@ void write_report(const std::string& dir, const ReportInfo& info, const Summary&
   html += page_foot(files);
   write_atomically((folder / "report.html").string(), html, "report");
 }
-
-void write_comparison(const std::string& dir, const ReportInfo& info,
-                      const std::vector<ComparedRun>& runs) {
-  const fs::path folder(dir);
-  struct Loaded {
-    const ComparedRun* run;
-    std::optional<Json> summary;
-    std::optional<RunCurves> curves;
-    std::string problem;
-  };
-  std::vector<Loaded> loaded;
-  // Contact figures get columns when some run has them.
-  const std::vector<std::pair<std::string, std::string>> contact_columns = {
-      {"gap_violation", "gap violation"}, {"penetration", "penetration"}};
-  std::vector<bool> shown(contact_columns.size(), false);
-  for (const auto& r : runs) {
-    Loaded l{&r, std::nullopt, std::nullopt, ""};
-    const fs::path run_dir = folder / r.folder;
-    if (!r.has_output) {
-      loaded.push_back(std::move(l));
-      continue;
-    }
-    try {
-      if (fs::exists(run_dir / "summary.json")) {
-        std::ifstream in(run_dir / "summary.json");
-        l.summary = Json::parse(in);
-        for (std::size_t k = 0; k < contact_columns.size(); ++k)
-          if (find_number(*l.summary, contact_columns[k].first)) shown[k] = true;
-      }
-      if (l.summary && fs::exists(run_dir / "history.csv"))
-        l.curves = derive_curves(read_history(run_dir / "history.csv"), *l.summary);
-    } catch (const std::exception& e) {
-      l.problem = e.what();
-    }
-    loaded.push_back(std::move(l));
-  }
-
-  std::string schemes;
-  for (const auto& r : runs) schemes += (schemes.empty() ? "" : ", ") + r.scheme;
-  std::string html = page_head("emdae comparison: " + info.scene_name + " (" + schemes + ")");
-  html += header_html(info, "comparison of <code>" + html_escape(schemes) + "</code>");
-
-  // The table: one row per scheme, the figures a reader compares.
-  html +=
-      "<section id=\"table\">\n<h2>Summary figures</h2>\n<div class=\"wide\">"
-      "<table class=\"compare\">\n"
-      "<tr><th>scheme</th><th>status</th><th>steps</th><th>energy error</th>"
-      "<th>lin. momentum error</th><th>ang. momentum error</th><th>constraint drift</th>";
-  int extra = 0;
-  for (std::size_t k = 0; k < contact_columns.size(); ++k)
-    if (shown[k]) {
-      html += "<th>" + contact_columns[k].second + "</th>";
-      ++extra;
-    }
-  html += "<th>Newton iterations</th><th>CPU s</th><th>checks</th></tr>\n";
-  for (const auto& l : loaded) {
-    const std::string name = html_escape(l.run->scheme);
-    const bool has_report = l.run->has_output && fs::exists(folder / l.run->folder / "report.html");
-    html += "<tr><td>" +
-            (has_report ? fmt::format("<a href=\"{}/report.html\"><code>{}</code></a>",
-                                      html_escape(l.run->folder), name)
-                        : "<code>" + name + "</code>") +
-            "</td>";
-    if (!l.summary) {
-      // The reason can be a long scene message: it gets the row, not the badge.
-      const std::string why = l.run->message.empty() ? "no summary was written" : l.run->message;
-      html += "<td><span class=\"status failed\">did not run</span></td>";
-      html += fmt::format("<td colspan=\"{}\" class=\"note\">{}</td></tr>\n", 8 + extra,
-                          html_escape(why));
-      continue;
-    }
-    const Json& s = *l.summary;
-    const auto num = [&s](const char* key) {
-      if (!s.contains(key)) return std::string("<td class=\"num\"></td>");
-      return "<td class=\"num\">" + format_value(s[key]) + "</td>";
-    };
-    html += "<td>" + status_badge(s.value("status", "?")) + "</td>";
-    html += num("steps") + num("energy_rel_error_max") + num("linear_momentum_error_max") +
-            num("angular_momentum_rel_error_max") + num("constraint_residual_max");
-    for (std::size_t k = 0; k < contact_columns.size(); ++k) {
-      if (!shown[k]) continue;
-      const auto x = find_number(s, contact_columns[k].first);
-      html += "<td class=\"num\">" + (x ? format_value(Json(*x)) : std::string()) + "</td>";
-    }
-    html += num("newton_iterations") +
-            fmt::format("<td class=\"num\">{:.3f}</td>", s.value("cpu_seconds", 0.0));
-    if (!s.contains("checks")) {
-      html += "<td class=\"note\">none declared</td>";
-    } else {
-      html += "<td>";
-      for (const auto& [cname, c] : s["checks"].items())
-        html += "<div><code>" + html_escape(cname) + "</code> " +
-                mark(c.value("result", "skipped")) + "</div>";
-      html += "</td>";
-    }
-    html += "</tr>\n";
-  }
-  html += "</table></div>\n";
-  for (const auto& l : loaded)
-    if (!l.problem.empty())
-      html += "<p class=\"warning\">" + html_escape(l.run->scheme) + ": " + html_escape(l.problem) +
-              "</p>\n";
-  html += "</section>\n";
-
-  html += "<section id=\"settings\">\n<h2>Settings</h2>\n<table class=\"settings\">\n";
-  for (const auto& [k, v] : info.settings)
-    html += "<tr><th>" + html_escape(k) + "</th><td>" + html_escape(v) + "</td></tr>\n";
-  html += "</table>\n</section>\n";
-
-  // The curves: one figure per quantity, one line per scheme that has it.
-  std::vector<Figure> figs = {
-      {"energy-error",
-       "Energy error",
-       "relative error",
-       Axis::Log,
-       {},
-       std::nullopt,
-       "|H<sub>n</sub> &minus; H<sub>0</sub> (&minus; W<sub>ext</sub>)| relative to the initial "
-       "energy scale." +
-           floor_caption(true),
-       ""},
-      {"linear-momentum",
-       "Linear momentum error",
-       "|L - L_0|",
-       Axis::Log,
-       {},
-       std::nullopt,
-       "|L<sub>n</sub> &minus; L<sub>0</sub>|." + floor_caption(true),
-       ""},
-      {"angular-momentum",
-       "Angular momentum error",
-       "|J - J_0| / |J_0|",
-       Axis::Log,
-       {},
-       std::nullopt,
-       "Relative to |J<sub>0</sub>| (absolute where J<sub>0</sub> = 0)." + floor_caption(true),
-       ""},
-      {"constraint",
-       "Constraint residual",
-       "max |Φ|",
-       Axis::Log,
-       {},
-       std::nullopt,
-       "max<sub>l</sub> |&Phi;<sub>l</sub>(q<sub>n</sub>)| over the constraints and, with "
-       "contact, the active contact nodes." +
-           floor_caption(true),
-       ""},
-      {"newton",
-       "Newton iterations",
-       "per step",
-       Axis::Steps,
-       {},
-       std::nullopt,
-       "Newton iterations of each accepted step.",
-       ""}};
-  std::string linear_note, angular_note;
-  for (const auto& l : loaded) {
-    if (!l.curves) continue;
-    const RunCurves& c = *l.curves;
-    const auto named = [&l](Series s) {
-      s.label = l.run->scheme;
-      return s;
-    };
-    figs[0].series.push_back(named(c.energy_error));
-    if (c.linear_error)
-      figs[1].series.push_back(named(*c.linear_error));
-    else
-      linear_note = c.linear_note;
-    if (c.angular_error)
-      figs[2].series.push_back(named(*c.angular_error));
-    else
-      angular_note = c.angular_note;
-    if (!c.constraint.empty()) {
-      // One line per scheme: the worst of its residual columns (bilateral
-      // constraints and, with contact, the active contact nodes).
-      Series worst = c.constraint.front();
-      for (const auto& s : c.constraint)
-        for (std::size_t i = 0; i < worst.y.size() && i < s.y.size(); ++i)
-          if (std::isnan(s.y[i]) || s.y[i] > worst.y[i]) worst.y[i] = s.y[i];
-      figs[3].series.push_back(named(worst));
-    }
-    figs[4].series.push_back(named(c.newton));
-  }
-  const std::string none = "no run got far enough to record a history";
-  for (auto& f : figs)
-    if (f.series.empty()) f.note = none;
-  drop_zero_curves(figs);
-  if (figs[1].series.empty() && !linear_note.empty()) figs[1].note = linear_note;
-  if (figs[2].series.empty() && !angular_note.empty()) figs[2].note = angular_note;
-  html += "<section id=\"curves\">\n<h2>Curves</h2>\n" + figures_html(figs, probe_gnuplot()) +
-          "</section>\n";
-  std::vector<std::string> files;
-  for (const auto& r : runs)
-    if (r.has_output && fs::exists(folder / r.folder / "report.html"))
-      files.push_back(r.folder + "/report.html");
-  html += page_foot(files);
-  write_atomically((folder / "compare.html").string(), html, "comparison");
-}
-
 }  // namespace emdae

@@ -20,7 +20,7 @@
 //
 // This file holds the figures and the files of a study (study.csv,
 // study.json, study.html); the runs themselves are made by the emdae
-// command (cli/commands.cpp) with the code path of `emdae run`.
+// command (cli/study_command.cpp) through run() of run/run.hpp, as `emdae run`.
 #pragma once
 
 #include <iosfwd>

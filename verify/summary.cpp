@@ -1,5 +1,7 @@
 #include "verify/summary.hpp"
 
+#include <fmt/format.h>
+#include <fmt/ostream.h>
 #include <unistd.h>
 
 #include <cerrno>
@@ -7,6 +9,7 @@
 #include <cstdio>
 #include <cstring>
 #include <fstream>
+#include <ostream>
 #include <stdexcept>
 
 #include "verify/atomic_file.hpp"
@@ -28,6 +31,29 @@ Check make_check(const std::string& name, std::optional<double> value, double li
 
 nlohmann::ordered_json optional_number(const std::optional<double>& x) {
   return x ? nlohmann::ordered_json(*x) : nlohmann::ordered_json(nullptr);
+}
+
+std::string maybe(const std::optional<double>& x, const std::string& note) {
+  return x ? fmt::format("{:.3e}", *x) : note;
+}
+
+std::string statics_text(const StaticsOutcome& st) {
+  std::string moments;
+  for (std::size_t k = 0; k < st.holding_moments.size(); ++k)
+    moments += fmt::format("{}{} {:.4g}", k ? ", " : "; holding moment of ", st.holds[k],
+                           st.holding_moments[k]);
+  return fmt::format("{} ({} pseudo steps, {} Newton iterations, {} active contacts{})", st.message,
+                     st.steps, st.newton_iterations, st.active_contacts, moments);
+}
+
+// "12 active nodes, normal force 4.75, pressure 0.1 .. 28 (mean 14, spread 2.0)"
+std::string pressure_text(const PairPressure& p) {
+  if (p.active_nodes == 0) return "no active node";
+  return fmt::format(
+      "{} active nodes, normal force {:.6g}, pressure {:.6g} .. {:.6g} (mean {:.6g}, "
+      "spread {})",
+      p.active_nodes, p.normal_force, *p.pressure_min, *p.pressure_max, *p.pressure_mean,
+      p.pressure_spread ? fmt::format("{:.3e}", *p.pressure_spread) : "-");
 }
 
 }  // namespace
@@ -63,6 +89,7 @@ Summary summarize(const RunInfo& info, const System& system, const Recorder& rec
   s.linear_momentum_note = recorder.conservation().linear_reason;
   s.angular_momentum_rel_error_max = recorder.angular_momentum_rel_error_max();
   s.angular_momentum_note = recorder.conservation().angular_reason;
+  s.angular_momentum_error_relative = recorder.angular_momentum_error_is_relative();
   if (s.angular_momentum_rel_error_max && !recorder.angular_momentum_error_is_relative())
     s.angular_momentum_note = "absolute error: initial angular momentum is zero";
   s.linear_momentum_balance_error_max = recorder.linear_momentum_balance_error_max();
@@ -266,6 +293,67 @@ nlohmann::ordered_json to_json(const Summary& s) {
 
 void write_summary(const std::string& path, const Summary& summary) {
   write_atomically(path, to_json(summary).dump(2) + "\n", "summary");
+}
+
+void print_summary(std::ostream& out, const Summary& s, const std::string& dir, bool fields,
+                   bool contact_table) {
+  const auto row = [&out](const std::string& label, const std::string& value) {
+    // At least one space: "check angular_momentum_balance_rel" is longer than the column.
+    fmt::print(out, "  {:<27} {}\n", label, value);
+  };
+  row("scene", s.scene + " (" + s.source + ")");
+  if (s.static_analysis) {
+    row("analysis", fmt::format("static, {} load increment{} to t = {}", s.increments,
+                                s.increments == 1 ? "" : "s", s.load_time));
+    row("status", s.status);
+    if (s.statics) row("statics", statics_text(*s.statics));
+    row("cpu time", fmt::format("{:.3f} s", s.cpu_seconds));
+    row("potential energy", fmt::format("{:.6g}", s.potential_energy));
+  } else {
+    row("scheme", fmt::format("{}, dt = {}, t_end = {}", s.scheme, s.dt, s.t_end));
+    row("status", s.status);
+    row("steps", fmt::format("{} to t = {} ({} Newton iterations, max {} per step, {} cut-backs)",
+                             s.steps, s.t_reached, s.newton_iterations,
+                             s.newton_iterations_max_per_step, s.cutbacks));
+    row("cpu time", fmt::format("{:.3f} s", s.cpu_seconds));
+    if (s.statics) row("statics", statics_text(*s.statics));
+    // With loads the energy error is that of the load-free intervals, and the
+    // balance H - H_0 = W is the figure for the rest.
+    const bool loaded = s.energy_balance_rel_error_max.has_value() && !s.energy_note.empty();
+    row(loaded ? "energy error (load-free)"
+               : (s.energy_error_relative ? "energy rel. error" : "energy abs. error"),
+        fmt::format("{:.3e}", s.energy_rel_error_max));
+    if (s.energy_balance_rel_error_max)
+      row("energy balance error", fmt::format("{:.3e} (external work {:.6g})",
+                                              *s.energy_balance_rel_error_max, s.external_work));
+    row("lin. momentum error", maybe(s.linear_momentum_error_max, s.linear_momentum_note));
+    if (!s.linear_momentum_error_max && s.linear_momentum_balance_error_max)
+      row("lin. momentum balance", fmt::format("{:.3e}", *s.linear_momentum_balance_error_max));
+    row("ang. momentum error", maybe(s.angular_momentum_rel_error_max, s.angular_momentum_note));
+    if (!s.angular_momentum_rel_error_max && s.angular_momentum_balance_rel_error_max)
+      row("ang. momentum balance",
+          fmt::format("{:.3e}", *s.angular_momentum_balance_rel_error_max));
+  }
+  row("max |Phi|", fmt::format("{:.3e}", s.constraint_residual_max));
+  if (s.contact) {
+    const ContactFigures& c = *s.contact;
+    if (!s.static_analysis)
+      row("contact", c.first
+                         ? fmt::format("from t = {:.4g} to {:.4g}, at most {} active, {} events",
+                                       *c.first, *c.last, c.active_contacts_max, c.contact_events)
+                         : std::string("none"));
+    row("gap violation, penetration",
+        fmt::format("{:.3e}, {:.3e}", c.gap_violation_max, c.penetration_max));
+  }
+  for (const auto& p : s.contact_pressure) row("contact " + p.pair, pressure_text(p));
+  for (const auto& c : s.checks) {
+    std::string verdict = "skipped: " + c.note;
+    if (c.result == "pass") verdict = fmt::format("pass: {:.3e} <= {}", *c.value, c.limit);
+    if (c.result == "fail") verdict = fmt::format("FAIL: {:.3e} > {}", *c.value, c.limit);
+    row("check " + c.name, verdict);
+  }
+  row("output", dir + "/{history.csv,summary.json,report.html" +
+                    (contact_table ? ",contact.csv" : "") + (fields ? ",fields.pvd" : "") + "}");
 }
 
 }  // namespace emdae

@@ -13,6 +13,7 @@
 // the energy and momentum figures of a dynamic run (to_json leaves them out).
 #pragma once
 
+#include <iosfwd>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
@@ -94,6 +95,7 @@ struct Summary {
   std::optional<double> linear_momentum_error_max;
   std::string linear_momentum_note;
   std::optional<double> angular_momentum_rel_error_max;
+  bool angular_momentum_error_relative = true;  // false: |J_0| ~ 0, the error is absolute
   std::string angular_momentum_note;
   std::optional<double> linear_momentum_balance_error_max;
   std::string linear_momentum_balance_note;
@@ -131,6 +133,11 @@ Summary summarize(const RunInfo& info, const System& system, const Recorder& rec
 /// The summary as JSON, keys in a reading order (what ran, what it cost,
 /// how well it conserved, whether it finished).
 nlohmann::ordered_json to_json(const Summary& summary);
+
+/// The summary as the table `emdae run` prints: one "label  value" row per
+/// figure, the checks, and the files written to `dir`.
+void print_summary(std::ostream& out, const Summary& summary, const std::string& dir,
+                   bool fields = false, bool contact_table = false);
 
 /// Writes `summary` to `path` atomically; throws std::runtime_error on failure.
 void write_summary(const std::string& path, const Summary& summary);

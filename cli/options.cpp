@@ -1,0 +1,190 @@
+// The command line of emdae (CLI11): subcommands, their options and help,
+// and the dispatch to the commands (run_command.cpp, compare_command.cpp,
+// study_command.cpp, check_command.cpp).
+#include <fmt/format.h>
+#include <fmt/ostream.h>
+
+#include <CLI/CLI.hpp>
+#include <iostream>
+
+#include "cli/commands.hpp"
+#include "integrators/schemes.hpp"
+
+namespace emdae {
+
+namespace {
+
+std::string known_list() {
+  std::string k;
+  for (const auto& s : known_schemes()) k += (k.empty() ? "" : ", ") + s;
+  return k;
+}
+
+constexpr const char* kExitCodesHelp =
+    "Exit codes:\n"
+    "  0    success\n"
+    "  1    internal error\n"
+    "  2    bad input (scene file or command line); no output is created\n"
+    "  3    the run failed numerically; history.csv and summary.json are kept and\n"
+    "       the summary's status says what failed\n"
+    "  4    the run finished but a [tolerances] check of the scene failed\n"
+    "  130  interrupted (Ctrl-C); history and summary are kept\n"
+    "\n"
+    "Without arguments emdae runs its built-in default scene (the paper's two-ring\n"
+    "impact, examples/ring_impact.toml) with scheme em and writes out/default/.";
+
+// The options several subcommands share, with one wording.
+void scene_argument(CLI::App* c, std::string& path) {
+  c->add_option("scene", path, "Scene file (TOML)")->required()->type_name("FILE");
+}
+
+void schemes_option(CLI::App* c, std::string& schemes, const char* verb) {
+  c->add_option(
+       "--schemes", schemes,
+       std::string("Comma-separated schemes to ") + verb + " (known: " + known_list() + ")")
+      ->required()
+      ->type_name("A,B,...");
+}
+
+void dt_option(CLI::App* c, std::string& dt) {
+  c->add_option("--dt", dt, "Time step, overriding the scene's time.dt")->type_name("X");
+}
+
+void t_end_option(CLI::App* c, std::string& t_end) {
+  c->add_option("--t-end", t_end, "End time, overriding the scene's time.t_end")->type_name("T");
+}
+
+void out_option(CLI::App* c, std::string& dir, const char* default_folder) {
+  c->add_option("--out", dir, std::string("Output folder (default: ") + default_folder + ")")
+      ->type_name("DIR");
+}
+
+void set_option(CLI::App* c, std::vector<std::string>& assignments,
+                const char* help = "Override a scene value (as for run)") {
+  c->add_option("--set", assignments, help)->allow_extra_args(false)->type_name("KEY=VALUE");
+}
+
+}  // namespace
+
+int emdae_main(int argc, char** argv) {
+  CLI::App app{
+      "emdae: energy-momentum time stepping for constrained Hamiltonian systems.\n"
+      "A scene file (TOML) in; history.csv, summary.json, report.html (and VTU fields for\n"
+      "FE bodies) out.",
+      "emdae"};
+  app.set_version_flag("--version", std::string("emdae ") + EMDAE_VERSION);
+  app.footer(kExitCodesHelp);
+  app.require_subcommand(0, 1);
+
+  RunOptions run_options;
+  CLI::App* run = app.add_subcommand("run",
+                                     "Run one scene with one scheme; write a history "
+                                     "(history.csv), a summary (summary.json) and a "
+                                     "report (report.html).");
+  scene_argument(run, run_options.scene_path);
+  run->add_option("--scheme", run_options.scheme,
+                  "Time-stepping scheme, overriding the scene's (known: " + known_list() + ")")
+      ->type_name("NAME");
+  dt_option(run, run_options.dt);
+  t_end_option(run, run_options.t_end);
+  out_option(run, run_options.out_dir, "out/<scene name>-<scheme>");
+  set_option(run, run_options.overrides,
+             "Override a scene value, e.g. --set time.dt=0.005 or "
+             "--set 'particles[0].mass=2' (repeatable)");
+  run->add_flag("-q,--quiet", run_options.quiet, "No progress lines and no summary table");
+  run->footer(kExitCodesHelp);
+
+  CompareOptions compare_options;
+  CLI::App* compare = app.add_subcommand(
+      "compare",
+      "Run one scene with several schemes, each into DIR/<scheme>/ with its own report, "
+      "and write DIR/compare.html: their error curves on common axes and their figures.");
+  scene_argument(compare, compare_options.scene_path);
+  schemes_option(compare, compare_options.schemes, "run");
+  dt_option(compare, compare_options.dt);
+  t_end_option(compare, compare_options.t_end);
+  out_option(compare, compare_options.out_dir, "out/<scene name>-compare");
+  set_option(compare, compare_options.overrides);
+  compare->add_flag("-q,--quiet", compare_options.quiet, "No progress lines and no table");
+  compare->footer(std::string(kExitCodesHelp) +
+                  "\n\ncompare exits with the worst code of its runs; a scheme that refuses "
+                  "the scene\ncounts as a failed run (3).");
+
+  StudyOptions study_options;
+  std::string study_dts, study_tols;
+  CLI::App* study = app.add_subcommand(
+      "study",
+      "Convergence and work-precision study: run one scene with each scheme at each step size "
+      "(ida: at each tolerance) and compare its state at t_end with a reference run (scheme em "
+      "at a much smaller step); write DIR/study.csv, study.json and study.html (error against "
+      "step size, error against CPU time) and print the table.");
+  scene_argument(study, study_options.scene_path);
+  schemes_option(study, study_options.schemes, "study");
+  CLI::Option* dts_option =
+      study
+          ->add_option("--dts", study_dts,
+                       "Comma-separated step sizes of em, midpoint and galpha (default: the "
+                       "scene's dt x 4, 2, 1, 1/2)")
+          ->type_name("H,H,...");
+  CLI::Option* tols_option =
+      study
+          ->add_option("--tols", study_tols,
+                       "Comma-separated tolerances of ida, rtol = atol, each in (0, 1); its "
+                       "output interval is the scene's dt (default: 1e-4,1e-6,1e-8)")
+          ->type_name("TOL,...");
+  study
+      ->add_option("--reference-dt", study_options.reference_dt,
+                   "Step of the reference run, scheme em (default: the smallest of --dts / 8)")
+      ->type_name("H");
+  t_end_option(study, study_options.t_end);
+  out_option(study, study_options.out_dir, "out/<scene name>-study");
+  set_option(study, study_options.overrides);
+  study->add_flag("-q,--quiet", study_options.quiet, "No progress lines and no table");
+  study->footer(
+      std::string(kExitCodesHelp) +
+      "\n\n"
+      "study: a run's error is max over the nodes of |q - q_ref| at t_end (also relative\n"
+      "to the diagonal of the scene's bounding box). The reference is the same scene, so\n"
+      "the same discretization in space: the error is that of the time discretization\n"
+      "only. Observed order between successive steps h1 > h2: log(e1/e2) / log(h1/h2);\n"
+      "through contact impacts it is not expected to be 2. Every run is checked before\n"
+      "the first starts (bad input: 2, nothing written). A run that fails is recorded\n"
+      "and the others still run; the exit code is then 3 (study.csv and study.json are\n"
+      "rewritten after every run). The scene's [tolerances] are not checked.");
+
+  std::string check_path;
+  std::vector<std::string> check_overrides;
+  CLI::App* check = app.add_subcommand(
+      "check", "Validate a scene and show what would be built, without running it.");
+  scene_argument(check, check_path);
+  set_option(check, check_overrides);
+  check->footer(kExitCodesHelp);
+
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    // Help and version are "errors" with exit code 0 in CLI11.
+    const int code = app.exit(e);
+    return code == 0 ? kExitOk : kExitBadInput;
+  }
+
+  try {
+    if (*run) return command_run(run_options, std::cout, std::cerr);
+    if (*check) return command_check(check_path, check_overrides, std::cout, std::cerr);
+    if (*compare) return command_compare(compare_options, std::cout, std::cerr);
+    if (*study) {
+      if (dts_option->count() > 0) study_options.dts = study_dts;
+      if (tols_option->count() > 0) study_options.tols = study_tols;
+      return command_study(study_options, std::cout, std::cerr);
+    }
+    RunOptions defaults;
+    defaults.scheme = "em";
+    defaults.out_dir = "out/default";
+    return command_run(defaults, std::cout, std::cerr);
+  } catch (const std::exception& e) {
+    fmt::print(std::cerr, "emdae: internal error: {}\n", e.what());
+    return kExitInternal;
+  }
+}
+
+}  // namespace emdae

@@ -1,0 +1,171 @@
+// `emdae run` and what every command shares (command_support.hpp).
+#include <fmt/format.h>
+#include <fmt/ostream.h>
+
+#include <algorithm>
+#include <filesystem>
+#include <sstream>
+
+#include "cli/command_support.hpp"
+#include "cli/default_scene.hpp"
+#include "cli/progress.hpp"
+
+namespace emdae {
+
+std::vector<SceneOverride> set_overrides(const std::vector<std::string>& assignments) {
+  std::vector<SceneOverride> out;
+  for (const auto& a : assignments) out.push_back({a, ""});
+  return out;
+}
+
+std::vector<SceneOverride> command_overrides(const std::vector<std::string>& assignments,
+                                             const std::string& scheme, const std::string& dt,
+                                             const std::string& t_end) {
+  std::vector<SceneOverride> overrides = set_overrides(assignments);
+  const auto flag = [&overrides](const std::string& value, const char* key, const char* name) {
+    if (!value.empty()) overrides.push_back({std::string(key) + "=" + value, name + (" " + value)});
+  };
+  flag(scheme, "scheme.name", "--scheme");
+  flag(dt, "time.dt", "--dt");
+  flag(t_end, "time.t_end", "--t-end");
+  return overrides;
+}
+
+int bad_input(std::ostream& err, const std::string& message) {
+  fmt::print(err, "emdae: error: {}\n", message);
+  return kExitBadInput;
+}
+
+std::unique_ptr<Scene> load(const std::string& path, const std::vector<SceneOverride>& overrides) {
+  if (path.empty())
+    return load_scene_text(default_scene_text,
+                           std::string("<built-in ") + default_scene_text_name + ">", overrides);
+  return load_scene(path, overrides);
+}
+
+std::string prepare_run(const std::string& scene_path, const std::vector<SceneOverride>& overrides,
+                        std::unique_ptr<Scene>& scene) {
+  try {
+    scene = load(scene_path, overrides);
+  } catch (const SceneError& e) {
+    return e.what();
+  }
+  // The scene parser refuses what a scheme cannot run; this is the last word.
+  return scheme_refusal(*scene->model, scene->settings);
+}
+
+int exit_code(const RunResult& result) {
+  switch (result.end) {
+    case RunResult::End::Failed:
+      return kExitRunFailed;
+    case RunResult::End::Interrupted:
+      return kExitInterrupted;
+    case RunResult::End::InternalError:
+      return kExitInternal;
+    default:
+      return result.summary.checks_pass() ? kExitOk : kExitChecksFailed;
+  }
+}
+
+int run_scene(const RunOptions& options, std::ostream& out, std::ostream& err, RunRecord& record) {
+  const auto refuse = [&](const std::string& message) {
+    record.message = message;
+    return bad_input(err, message);
+  };
+  const std::vector<SceneOverride> overrides =
+      command_overrides(options.overrides, options.scheme, options.dt, options.t_end);
+
+  // Everything that can be wrong with the input is found here, before any
+  // output exists.
+  std::unique_ptr<Scene> scene;
+  const std::string problem = prepare_run(options.scene_path, overrides, scene);
+  if (scene)
+    for (const auto& w : scene->warnings) fmt::print(err, "emdae: warning: {}\n", w);
+  if (!problem.empty()) return refuse(problem);
+  RunSettings& settings = scene->settings;
+  // A static analysis has no scheme: its folder is named after what it is.
+  settings.out_dir =
+      options.out_dir.empty()
+          ? "out/" + settings.name + "-" + (settings.static_only ? "static" : settings.scheme)
+          : options.out_dir;
+  ConsoleObserver observer(err, options.quiet, options.progress_label);
+  RunResult result;
+  try {
+    result = run(*scene->model, settings, &observer);
+  } catch (const OutputError& e) {
+    // A folder that could be made is the run's, even when its history could not.
+    if (std::filesystem::is_directory(settings.out_dir)) record.dir = settings.out_dir;
+    return refuse(e.what());
+  } catch (const std::exception& e) {
+    fmt::print(err, "emdae: error: {}\n", e.what());
+    return kExitInternal;
+  }
+  record.dir = settings.out_dir;
+  const Summary& summary = result.summary;
+  int code = exit_code(result);
+  if (!options.quiet || code != kExitOk)
+    print_summary(out, summary, settings.out_dir, result.fields, result.contact_table);
+  if (code == kExitChecksFailed)
+    for (const auto& c : summary.checks)
+      if (c.result == "fail")
+        fmt::print(err, "emdae: {}check {} failed\n", options.progress_label, c.name);
+  if (code != kExitOk && code != kExitChecksFailed) fmt::print(err, "emdae: {}\n", summary.status);
+  return code;
+}
+
+int command_run(const RunOptions& options, std::ostream& out, std::ostream& err) {
+  RunRecord record;
+  return run_scene(options, out, err, record);
+}
+
+std::vector<std::string> split_list(const std::string& text) {
+  std::vector<std::string> items;
+  std::string item;
+  std::istringstream in(text);
+  while (std::getline(in, item, ',')) {
+    item.erase(0, item.find_first_not_of(" \t"));
+    item.erase(item.find_last_not_of(" \t") + 1);
+    if (!item.empty()) items.push_back(item);
+  }
+  return items;
+}
+
+std::vector<std::string> parse_schemes(const std::string& text, std::string& problem) {
+  const std::vector<std::string> schemes = split_list(text);
+  const auto known = known_schemes();
+  std::string known_list;
+  for (const auto& k : known) known_list += (known_list.empty() ? "" : ", ") + k;
+  if (schemes.empty()) {
+    problem = fmt::format("--schemes: no scheme given (known: {})", known_list);
+    return {};
+  }
+  for (std::size_t i = 0; i < schemes.size(); ++i) {
+    if (std::find(known.begin(), known.end(), schemes[i]) == known.end()) {
+      problem = fmt::format("--schemes: unknown scheme '{}' (known: {})", schemes[i], known_list);
+      return {};
+    }
+    if (std::find(schemes.begin(), schemes.begin() + static_cast<long>(i), schemes[i]) !=
+        schemes.begin() + static_cast<long>(i)) {
+      problem = fmt::format("--schemes: '{}' is given twice", schemes[i]);
+      return {};
+    }
+  }
+  return schemes;
+}
+
+int worse(int current, int code) {
+  const auto rank = [](int c) {
+    return c == kExitOk ? 0 : c == kExitChecksFailed ? 1 : c == kExitInternal ? 3 : 2;
+  };
+  if (rank(code) <= rank(current)) return current;
+  return code == kExitBadInput ? kExitRunFailed : code;
+}
+
+std::string static_scene_refused(const Scene& scene, const char* command) {
+  return fmt::format(
+      "{}:1:1: key 'time': missing: the scene is a static analysis ([statics] without [time]), "
+      "and {} runs time-stepping schemes; run it with 'emdae run', or add [time]",
+      scene.settings.source, command);
+}
+
+}  // namespace emdae

@@ -1,0 +1,329 @@
+// [[bodies]], [[contacts]], [[dirichlet]] and [[loads]]: calls on the Model
+// (core/model.hpp) and add_mortar_contact (contact/contact_pair.hpp), which
+// compute the masses, lumped tractions and prescribed motions they imply.
+#include <cmath>
+#include <filesystem>
+
+#include "cli/scene_reader.hpp"
+#include "contact/contact_pair.hpp"
+#include "core/gmsh_reader.hpp"
+
+namespace emdae::scene_reader {
+
+std::string Builder::unique_name(const Fields& f, std::vector<std::string>& taken,
+                                 const std::string& fallback, const char* what) const {
+  std::string name = fallback;
+  if (const auto given = f.optional_string("name")) {
+    if (given->empty()) f.fail_key("name", "must not be empty, received \"\"");
+    name = *given;
+  }
+  if (std::find(taken.begin(), taken.end(), name) != taken.end())
+    f.fail_key("name", fmt::format("duplicate {} name, received \"{}\"", what, name));
+  taken.push_back(name);
+  return name;
+}
+
+Mesh Builder::mesh(const Fields& f) const {
+  const Fields m = f.table("mesh", "{type = \"ring\" | \"rectangle\" | \"gmsh\", ...}", "a mesh");
+  Mesh mesh = generated_mesh(m);
+  // Any mesh may be turned about its area centroid (a square on its corner).
+  if (const auto degrees = m.optional_number("rotation")) {
+    if (!(std::abs(*degrees) <= 360.0))
+      m.fail_key("rotation", "must be an angle in degrees in [-360, 360], received " +
+                                 show(*m.find("rotation")));
+    rotate_mesh(mesh, *degrees * M_PI / 180.0);
+    mesh.description += fmt::format(", turned by {} degrees", *degrees);
+  }
+  return mesh;
+}
+
+Mesh Builder::generated_mesh(const Fields& m) const {
+  const std::string type = m.string("type", "\"ring\", \"rectangle\" or \"gmsh\"");
+  // Element counts beyond this are a typo, not a mesh (and would overflow).
+  constexpr long kMaxCount = 100000, kMaxElements = 10000000;
+  if (type == "ring") {
+    m.only({"type", "centre", "inner_radius", "outer_radius", "around", "through", "rotation"});
+    const Vec c = m.vector("centre", 2, "the ring's centre, 2 numbers");
+    const double r_in = m.positive("inner_radius", "the inner radius, a positive number");
+    const double r_out = m.positive("outer_radius", "the outer radius, a positive number");
+    if (!(r_out > r_in))
+      m.fail_key("outer_radius", "must exceed inner_radius = " + show_number(r_in) + ", received " +
+                                     show(*m.find("outer_radius")));
+    if (!m.has("around")) m.require("around", "elements around, an integer >= 3");
+    if (!m.has("through")) m.require("through", "elements through the wall, an integer >= 1");
+    const long around = m.integer_in("around", 0, 3, kMaxCount);
+    const long through = m.integer_in("through", 0, 1, kMaxCount);
+    if (around * through > kMaxElements)
+      m.fail_key("through", fmt::format("{} x {} elements is more than {} in one body, received {}",
+                                        around, through, kMaxElements, through));
+    return ring_mesh(Eigen::Vector2d(c[0], c[1]), r_in, r_out, static_cast<int>(around),
+                     static_cast<int>(through));
+  }
+  if (type == "rectangle") {
+    m.only(
+        {"type", "origin", "width", "height", "nx", "ny", "grading", "grading_centre", "rotation"});
+    const Vec o = m.vector("origin", 2, "the lower left corner, 2 numbers");
+    const double w = m.positive("width", "the width, a positive number");
+    const double h = m.positive("height", "the height, a positive number");
+    if (!m.has("nx")) m.require("nx", "elements along x, an integer >= 1");
+    if (!m.has("ny")) m.require("ny", "elements along y, an integer >= 1");
+    const long nx = m.integer_in("nx", 0, 1, kMaxCount);
+    const long ny = m.integer_in("ny", 0, 1, kMaxCount);
+    if (nx * ny > kMaxElements)
+      m.fail_key("ny", fmt::format("{} x {} elements is more than {} in one body, received {}", nx,
+                                   ny, kMaxElements, ny));
+    const Eigen::Vector2d lo(o[0], o[1]), hi(o[0] + w, o[1] + h);
+    Mesh mesh = rectangle_mesh(lo, w, h, static_cast<int>(nx), static_cast<int>(ny));
+    // Grading: element sizes growing away from a point (Hertz's contact).
+    const auto grading = m.optional_vector("grading", 2);
+    const auto centre = m.optional_vector("grading_centre", 2);
+    if (centre && !grading)
+      m.fail_key("grading_centre", "has no effect without grading = [px, py], received " +
+                                       show(*m.find("grading_centre")));
+    if (grading) {
+      for (int d = 0; d < 2; ++d)
+        if (!((*grading)[d] >= 1.0 && (*grading)[d] <= 10.0))
+          m.fail_key("grading", "must be two powers in [1, 10] (1: uniform), received " +
+                                    show(*m.find("grading")));
+      const Eigen::Vector2d c =
+          centre ? Eigen::Vector2d((*centre)[0], (*centre)[1]) : 0.5 * (lo + hi);
+      if (!(c.x() >= lo.x() && c.x() <= hi.x() && c.y() >= lo.y() && c.y() <= hi.y()))
+        m.fail_key("grading_centre",
+                   fmt::format("must lie in the rectangle ({}, {}) .. ({}, {}), received {}",
+                               lo.x(), lo.y(), hi.x(), hi.y(), show(*m.find("grading_centre"))));
+      grade_mesh(mesh, lo, hi, c, Eigen::Vector2d((*grading)[0], (*grading)[1]));
+    }
+    return mesh;
+  }
+  if (type == "gmsh") {
+    // A Gmsh MSH 4.1 file, relative to the scene file's folder; its physical
+    // curves become the body's edge sets (see core/gmsh_reader.hpp).
+    m.only({"type", "file", "surface", "rotation"});
+    const std::string file = m.string("file", "the mesh file, a path relative to the scene");
+    const std::string surface = m.optional_string("surface").value_or("");
+    const std::filesystem::path base = std::filesystem::path(scene_.settings.source).parent_path();
+    const std::string path = (base / file).string();
+    try {
+      Mesh mesh = read_gmsh(path, surface);
+      mesh.description =
+          fmt::format("gmsh {}{}, {} elements", file, surface.empty() ? "" : " (" + surface + ")",
+                      mesh.n_elements());
+      return mesh;
+    } catch (const std::exception& e) {
+      m.fail_key("file", std::string(e.what()) + ", received \"" + file + "\"");
+    }
+  }
+  m.fail_key("type", "unknown mesh type, received " + show(*m.find("type")) +
+                         hint(type, {"ring", "rectangle", "gmsh"}, "mesh types"));
+}
+
+Material Builder::material(const Fields& f) const {
+  const Fields m = f.table("material", "{model, young, poisson, density}", "a material");
+  m.only({"model", "young", "poisson", "density"});
+  MaterialModel model = MaterialModel::SaintVenantKirchhoff;
+  if (const auto name = m.optional_string("model")) {
+    try {
+      model = parse_material_model(*name);
+    } catch (const std::invalid_argument&) {
+      m.fail_key("model", "unknown material model, received " + show(*m.find("model")) +
+                              hint(*name, {"svk", "neo-hooke"}, "models"));
+    }
+  }
+  const double young = m.positive("young", "Young's modulus E, a positive number");
+  const double nu = m.number("poisson", "Poisson's ratio, in (-1, 0.5)");
+  // nu -> 0.5 is incompressible (lambda infinite), nu <= -1 makes mu <= 0.
+  if (!(nu > -1.0 && nu < 0.5))
+    m.fail_key("poisson", "must be in (-1, 0.5), received " + show(*m.find("poisson")));
+  const double rho = m.positive("density", "the mass density, a positive number");
+  try {
+    return make_material(model, young, nu, rho);
+  } catch (const std::invalid_argument& e) {
+    fail(m.where(), m.path(), e.what());
+  }
+}
+
+void Builder::parse_body(const Fields& f) {
+  f.only({"name", "mesh", "material", "velocity", "angular_velocity", "lumped_mass"});
+  if (model().dim() != 2)
+    fail(f.where(), f.path(),
+         fmt::format("FE bodies are plane strain and need scene.dimension = 2, received "
+                     "dimension {}",
+                     model().dim()));
+  const std::string name = f.string("name", "a unique name for the body");
+  if (const auto it = body_where_.find(name); it != body_where_.end())
+    f.fail_key("name", "duplicate body name, received \"" + name + "\" (first defined at " +
+                           it->second + ")");
+  Mesh m = mesh(f);
+  const Material mat = material(f);
+  BodyOptions options;
+  options.lumped_mass = f.boolean("lumped_mass", false);
+  const Vec v = f.optional_vector("velocity", 2).value_or(Vec::Zero(2));
+  options.velocity = Eigen::Vector2d(v[0], v[1]);
+  options.angular_velocity = f.optional_number("angular_velocity").value_or(0.0);
+  model_call(f, [&] { model().add_body(name, std::move(m), mat, options); });
+  body_where_[name] = f.where();
+}
+
+std::string Builder::set_ref(const Fields& f, std::string_view k, const toml::node& n,
+                             Model::SetKind kind) const {
+  const char* kind_name = kind == Model::SetKind::Nodes ? "node set" : "edge set";
+  if (!n.is_string())
+    f.fail_at(
+        n, k,
+        std::string("must name a ") + kind_name + " as \"body.set\", received " + show_typed(n));
+  const std::string& text = n.as_string()->get();
+  try {
+    model().find_set(text, kind, std::string(k));
+  } catch (const ModelError& e) {
+    // What there is to choose from: the bodies, or the sets of the body named.
+    std::vector<std::string> bodies, sets;
+    for (const auto& b : model().bodies()) bodies.push_back(b.name);
+    const auto dot = text.find('.');
+    std::string more;
+    if (dot == std::string::npos) {
+      more = " (e.g. \"" + (bodies.empty() ? std::string("ring") : bodies.front()) + ".outer\")";
+    } else if (std::find(bodies.begin(), bodies.end(), text.substr(0, dot)) == bodies.end()) {
+      more = bodies.empty() ? std::string(" (the scene has no [[bodies]] before this)")
+                            : hint(text.substr(0, dot), bodies, "bodies");
+    } else {
+      const Mesh& m = model().body(text.substr(0, dot)).mesh;
+      if (kind == Model::SetKind::Nodes)
+        for (const auto& entry : m.node_sets) sets.push_back(entry.first);
+      else
+        for (const auto& entry : m.edge_sets) sets.push_back(entry.first);
+      more = hint(text.substr(dot + 1), sets,
+                  std::string(kind_name) + "s of '" + text.substr(0, dot) + "'");
+    }
+    f.fail_at(n, k, std::string(e.what()) + ", received " + show(n) + more);
+  }
+  return text;
+}
+
+TimeFunction Builder::time_function(const Fields& f, std::string_view k) const {
+  if (!f.has(k)) return TimeFunction::constant(1.0);
+  const Fields t =
+      f.table(k, "{type = \"constant\" | \"ramp\" | \"hat\" | \"table\", ...}", "a time function");
+  const std::string type = t.string("type", "\"constant\", \"ramp\", \"hat\" or \"table\"");
+  const std::vector<std::string> types = {"constant", "ramp", "hat", "table"};
+  if (std::find(types.begin(), types.end(), type) == types.end())
+    t.fail_key("type", "unknown time function, received " + show(*t.find("type")) +
+                           hint(type, types, "time functions"));
+  if (type == "constant") {
+    t.only({"type", "value"});
+    return TimeFunction::constant(t.optional_number("value").value_or(1.0));
+  }
+  if (type == "ramp" || type == "hat") {
+    const char* height = type == "ramp" ? "value" : "peak";
+    t.only({"type", "start", "end", height});
+    const double start = t.number("start", "the time it starts");
+    const double end = t.number("end", "the time it ends, after start");
+    if (!(end > start))
+      t.fail_key("end", "must exceed start = " + show_number(start) + ", received " +
+                            show(*t.find("end")));
+    const double value = t.optional_number(height).value_or(1.0);
+    return type == "ramp" ? TimeFunction::ramp(start, end, value)
+                          : TimeFunction::hat(start, end, value);
+  }
+  t.only({"type", "times", "values"});
+  const std::vector<double> times = t.numbers("times", "increasing times, a list of numbers");
+  const std::vector<double> values =
+      t.numbers("values", "the values at those times, a list of numbers");
+  for (std::size_t i = 1; i < times.size(); ++i)
+    if (!(times[i] > times[i - 1]))
+      t.fail_key("times", "must increase strictly, received " + show(*t.find("times")));
+  if (values.size() != times.size())
+    t.fail_key("values", fmt::format("must have as many entries as times ({}), received {}",
+                                     times.size(), show(*t.find("values"))));
+  return TimeFunction::table(times, values);
+}
+
+void Builder::parse_contact(const Fields& f) {
+  f.only({"name", "slave", "master", "search_margin", "modified_mass"});
+  const std::string slave =
+      set_ref(f, "slave", Model::SetKind::Edges, "the slave surface, \"body.set\"");
+  const std::string master =
+      set_ref(f, "master", Model::SetKind::Edges, "the master surface, \"body.set\"");
+  const std::string slave_body = slave.substr(0, slave.find('.'));
+  if (slave != master && slave_body == master.substr(0, master.find('.')))
+    warn(f.where(), "slave and master are on the same body '" + slave_body +
+                        "': self-contact is not what the mortar contact was verified for");
+  const std::string name = unique_name(f, contact_names_, slave + "/" + master, "contact");
+  ContactOptions options;
+  options.search_margin = f.optional_non_negative("search_margin").value_or(options.search_margin);
+  options.modified_mass = f.boolean("modified_mass", false);
+  model_call(f, [&] { add_mortar_contact(model(), slave, master, name, options); });
+}
+
+void Builder::parse_dirichlet(const Fields& f) {
+  f.only({"nodes", "fixed", "displacement", "time_function", "components"});
+  const std::string set = set_ref(f, "nodes", Model::SetKind::Nodes, "the node set, \"body.set\"");
+  const bool fixed = f.boolean("fixed", false);
+  const auto u = f.optional_vector("displacement", 2);
+  if (fixed && u)
+    f.fail_key("displacement", "give either fixed = true or a displacement, not both, received " +
+                                   show(*f.find("displacement")));
+  if (!fixed && !u)
+    f.fail_key("fixed", "nothing prescribed: give fixed = true or displacement = [ux, uy]" +
+                            std::string(f.has("fixed") ? ", received false" : ""));
+  if (!u && f.has("time_function"))
+    f.fail_key("time_function", "only a displacement has a time function, received " +
+                                    show(*f.find("time_function")));
+  Components components = Components::XY;
+  if (const auto c = f.optional_string("components")) {
+    if (*c == "x") {
+      components = Components::X;
+    } else if (*c == "y") {
+      components = Components::Y;
+    } else if (*c != "xy") {
+      f.fail_key("components",
+                 "must be \"xy\", \"x\" or \"y\", received " + show(*f.find("components")));
+    }
+  }
+  if (!u) return model_call(f, [&] { model().fix(set, components); });
+  const TimeFunction g = time_function(f, "time_function");
+  if (g(0.0) != 0.0)
+    warn(f.where(), "the displacement's time function is " + show_number(g(0.0)) +
+                        " at t = 0: the nodes of " + set + " start displaced");
+  model_call(f, [&] { model().prescribe_displacement(set, *u, g, components); });
+}
+
+void Builder::parse_load(const Fields& f) {
+  f.only({"name", "type", "on", "body", "torque", "acceleration", "traction", "time_function"});
+  const std::string type = f.string("type", "\"torque\", \"body_force\" or \"traction\"");
+  const std::vector<std::string> types = {"torque", "body_force", "traction"};
+  if (std::find(types.begin(), types.end(), type) == types.end())
+    f.fail_key("type", "unknown load type, received " + show(*f.find("type")) +
+                           hint(type, types, "load types"));
+  // Keys of the other load types are mistakes, not options.
+  const std::map<std::string, std::vector<std::string>> keys = {
+      {"torque", {"on", "torque"}},
+      {"body_force", {"body", "acceleration"}},
+      {"traction", {"on", "traction"}}};
+  for (const auto& k : {"on", "body", "torque", "acceleration", "traction"}) {
+    const auto& mine = keys.at(type);
+    if (f.has(k) && std::find(mine.begin(), mine.end(), k) == mine.end())
+      f.fail_key(k, "not a key of a " + type + " load (its keys: " + join(mine) + "), received " +
+                        show(*f.find(k)));
+  }
+  const std::string name =
+      unique_name(f, load_names_, fmt::format("{} {}", type, load_names_.size()), "load");
+  const TimeFunction g = time_function(f, "time_function");
+  if (type == "torque") {
+    const std::string on =
+        set_ref(f, "on", Model::SetKind::Nodes, "the node set it acts on, \"body.set\"");
+    const double torque = f.number("torque", "the torque (moment), a number");
+    model_call(f, [&] { model().add_torque(name, on, torque, g); });
+  } else if (type == "body_force") {
+    const auto& n = f.require("body", "the name of the body it acts on");
+    if (!n.is_string()) f.fail_at(n, "body", "must name a body, received " + show_typed(n));
+    const Vec b = f.vector("acceleration", 2, "the force per unit mass, 2 numbers");
+    model_call(f, [&] { model().add_body_force(name, n.as_string()->get(), b, g); });
+  } else {
+    const std::string on =
+        set_ref(f, "on", Model::SetKind::Edges, "the edge set it acts on, \"body.set\"");
+    const Vec t = f.vector("traction", 2, "the force per unit (reference) length, 2 numbers");
+    model_call(f, [&] { model().add_traction(name, on, t, g); });
+  }
+}
+
+}  // namespace emdae::scene_reader

@@ -1,0 +1,279 @@
+// `emdae study`: convergence and work-precision, one scene over schemes and
+// step sizes (ida: tolerances) against a fine reference run.
+#include <fmt/format.h>
+#include <fmt/ostream.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <limits>
+
+#include "cli/command_support.hpp"
+#include "cli/progress.hpp"
+#include "run/describe.hpp"
+#include "verify/study.hpp"
+
+namespace emdae {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+// A number of the command line: all of `text`, finite.
+std::optional<double> parse_number(const std::string& text) {
+  if (text.empty() || std::isspace(static_cast<unsigned char>(text.front()))) return std::nullopt;
+  char* end = nullptr;
+  errno = 0;
+  const double x = std::strtod(text.c_str(), &end);
+  if (end != text.c_str() + text.size() || errno == ERANGE || !std::isfinite(x))
+    return std::nullopt;
+  return x;
+}
+
+// The values of a comma-separated list option (--dts, --tols): numbers,
+// each once, in the open interval (0, upper); sorted from the largest down.
+std::vector<double> parse_values(const std::string& option, const std::string& text,
+                                 const char* what, double upper, std::string& problem) {
+  std::vector<double> values;
+  for (const auto& item : split_list(text)) {
+    const auto x = parse_number(item);
+    if (!x) {
+      problem = fmt::format("{}: '{}' is not a number", option, item);
+      return {};
+    }
+    if (!(*x > 0 && *x < upper)) {
+      problem =
+          std::isinf(upper)
+              ? fmt::format("{}: {} must be positive, received {}", option, what, item)
+              : fmt::format("{}: {} must be in (0, {:g}), received {}", option, what, upper, item);
+      return {};
+    }
+    if (std::find(values.begin(), values.end(), *x) != values.end()) {
+      problem = fmt::format("{}: {} is given twice", option, item);
+      return {};
+    }
+    values.push_back(*x);
+  }
+  if (values.empty()) problem = fmt::format("{}: no {} given", option, what);
+  std::sort(values.begin(), values.end(), std::greater<>());
+  return values;
+}
+
+// One run of a study: the scene with `overrides`, run as `emdae run` runs
+// it but without output of its own; its figures and its positions at t_end
+// go to `run`.
+int study_run(const std::string& scene_path, const std::vector<SceneOverride>& overrides,
+              const std::string& label, bool quiet, std::ostream& err, StudyRun& run) {
+  std::unique_ptr<Scene> scene;
+  const std::string problem = prepare_run(scene_path, overrides, scene);
+  if (!problem.empty()) {
+    // Checked before the study began: only a scene file changed since gets here.
+    run.ran = true;
+    run.status = problem;
+    return kExitRunFailed;
+  }
+  RunSettings& settings = scene->settings;
+  // The scene's [tolerances] judge runs at its own step: not checked here.
+  settings.tolerances = {};
+  ConsoleObserver observer(err, quiet, label + " ");
+  const RunResult result = emdae::run(*scene->model, settings, &observer);
+  run.take(result.summary);
+  const double t_end = settings.time.t_end;
+  const int code = exit_code(result);
+  if (code == kExitOk && std::abs(result.state.t - t_end) <= 1e-9 * std::max(1.0, std::abs(t_end)))
+    run.q_end = result.state.q;
+  return code;
+}
+
+std::string list_text(const std::vector<double>& values) {
+  std::string out;
+  for (double x : values) out += fmt::format("{}{:g}", out.empty() ? "" : ", ", x);
+  return out;
+}
+
+}  // namespace
+
+int command_study(const StudyOptions& options, std::ostream& out, std::ostream& err) {
+  const auto refuse = [&err](const std::string& message) { return bad_input(err, message); };
+  // Everything is checked before anything runs or is written: the scene, the
+  // lists, and every run of the study as its scene and stepper.
+  const std::vector<SceneOverride> base =
+      command_overrides(options.overrides, "", "", options.t_end);
+  std::unique_ptr<Scene> scene;
+  try {
+    scene = load(options.scene_path, base);
+  } catch (const SceneError& e) {
+    return refuse(e.what());
+  }
+  if (scene->settings.static_only) return refuse(static_scene_refused(*scene, "study"));
+  std::string problem;
+  const std::vector<std::string> schemes = parse_schemes(options.schemes, problem);
+  if (!problem.empty()) return refuse(problem);
+  const bool has_ida = std::find(schemes.begin(), schemes.end(), "ida") != schemes.end();
+  const bool has_steps =
+      std::any_of(schemes.begin(), schemes.end(), [](const std::string& s) { return s != "ida"; });
+  const double scene_dt = scene->settings.time.dt;
+  std::vector<double> dts = {4 * scene_dt, 2 * scene_dt, scene_dt, scene_dt / 2};
+  if (options.dts) {
+    dts = parse_values("--dts", *options.dts, "step size", std::numeric_limits<double>::infinity(),
+                       problem);
+    if (!problem.empty()) return refuse(problem);
+  }
+  std::vector<double> tols = {1e-4, 1e-6, 1e-8};
+  if (options.tols) {
+    tols = parse_values("--tols", *options.tols, "tolerance", 1.0, problem);
+    if (!problem.empty()) return refuse(problem);
+  }
+  double reference_dt = dts.back() / 8;
+  std::string reference_text = fmt::format("{:g}", reference_dt);
+  if (!options.reference_dt.empty()) {
+    const auto x = parse_number(options.reference_dt);
+    if (!x || !(*x > 0))
+      return refuse(fmt::format("--reference-dt: must be a positive number, received '{}'",
+                                options.reference_dt));
+    reference_dt = *x;
+    reference_text = options.reference_dt;
+  }
+  if (has_steps && !(reference_dt < dts.back()))
+    return refuse(fmt::format(
+        "--reference-dt: must be smaller than the smallest step of --dts ({:g}), received {}",
+        dts.back(), reference_text));
+
+  // The plan: the reference first, then scheme by scheme from the largest
+  // step (loosest tolerance) down. Each run's values are scene overrides
+  // named after the option that gave them, so the scene parser checks them
+  // (a step below the scene's min_dt, ...) and names them in its messages.
+  struct Planned {
+    StudyRun run;
+    std::vector<SceneOverride> overrides;
+    std::string label;
+  };
+  std::vector<Planned> plan;
+  const auto value = [](double x) { return fmt::format("{}", x); };
+  {
+    Planned p{{}, base, fmt::format("reference em dt {}", reference_text)};
+    p.run.scheme = "em";
+    p.run.dt = reference_dt;
+    p.run.reference = true;
+    p.overrides.push_back({"scheme.name=em", "--reference-dt " + reference_text + " (scheme em)"});
+    p.overrides.push_back({"time.dt=" + value(reference_dt), "--reference-dt " + reference_text});
+    plan.push_back(std::move(p));
+  }
+  for (const auto& scheme : schemes) {
+    for (double x : scheme == "ida" ? tols : dts) {
+      const bool ida = scheme == "ida";
+      Planned p{{}, base, fmt::format("{} {} {:g}", scheme, ida ? "tol" : "dt", x)};
+      p.run.scheme = scheme;
+      p.run.dt = ida ? scene_dt : x;
+      if (ida) p.run.tol = x;
+      p.overrides.push_back({"scheme.name=" + scheme, "--schemes " + scheme});
+      if (ida) {
+        p.overrides.push_back({"scheme.ida.rtol=" + value(x), fmt::format("--tols {:g}", x)});
+        p.overrides.push_back({"scheme.ida.atol=" + value(x), fmt::format("--tols {:g}", x)});
+      } else {
+        p.overrides.push_back({"time.dt=" + value(x), fmt::format("--dts {:g}", x)});
+      }
+      plan.push_back(std::move(p));
+    }
+  }
+  std::vector<std::string> warnings;
+  for (const auto& p : plan) {
+    std::unique_ptr<Scene> s;
+    const std::string why = prepare_run(options.scene_path, p.overrides, s);
+    if (!why.empty()) return refuse(p.label + ": " + why);
+    for (const auto& w : s->warnings)
+      if (std::find(warnings.begin(), warnings.end(), w) == warnings.end()) warnings.push_back(w);
+  }
+  if (options.dts && !has_steps)
+    warnings.push_back(
+        "--dts is not used: ida's runs go by --tols (its output interval is the "
+        "scene's dt)");
+  if (options.tols && !has_ida) warnings.push_back("--tols is not used: only ida runs by them");
+  for (const auto& w : warnings) fmt::print(err, "emdae: warning: {}\n", w);
+
+  const std::string dir =
+      options.out_dir.empty() ? "out/" + scene->settings.name + "-study" : options.out_dir;
+  try {
+    create_output_folder(dir);
+  } catch (const OutputError& e) {
+    return refuse(e.what());
+  }
+
+  Study study;
+  study.scene = scene->settings.name;
+  study.description = scene->settings.description;
+  study.source = scene->settings.source;
+  study.dimension = scene->model->dim();
+  study.t_end = scene->settings.time.t_end;
+  study.size = bounding_box_diagonal(scene->system().initial_positions(), scene->model->dim());
+  study.contact = !scene->model->contacts().empty();
+  study.schemes = schemes;
+  if (has_steps) study.dts = dts;
+  if (has_ida) study.tols = tols;
+  study.reference = plan.front().run;
+  for (std::size_t i = 1; i < plan.size(); ++i) study.runs.push_back(plan[i].run);
+
+  ReportInfo info = report_info(*scene->model, scene->settings);
+  info.scheme.clear();
+  // What the study varies is listed by itself, not as the scene's values.
+  info.settings.erase(std::remove_if(info.settings.begin(), info.settings.end(),
+                                     [](const auto& kv) {
+                                       return kv.first == "time step dt" ||
+                                              kv.first == "IDA tolerances" ||
+                                              kv.first == "spectral radius at infinity";
+                                     }),
+                      info.settings.end());
+  std::vector<std::pair<std::string, std::string>> varied;
+  std::string scheme_list;
+  for (const auto& s : schemes) scheme_list += (scheme_list.empty() ? "" : ", ") + s;
+  varied.emplace_back("schemes", scheme_list);
+  if (has_steps) varied.emplace_back("step sizes", list_text(dts));
+  if (has_ida)
+    varied.emplace_back("IDA tolerances (rtol = atol)",
+                        fmt::format("{}; output every {:g}", list_text(tols), scene_dt));
+  if (std::find(schemes.begin(), schemes.end(), "galpha") != schemes.end())
+    varied.emplace_back("galpha spectral radius at infinity",
+                        fmt::format("{}", scene->settings.schemes.galpha.rho_inf));
+  varied.emplace_back("reference", fmt::format("scheme em, dt = {:g}", reference_dt));
+  info.settings.insert(info.settings.begin(), varied.begin(), varied.end());
+  scene.reset();  // each run loads its own
+
+  // The runs, one after the other; the tables are rewritten after each, so
+  // that an interrupted or crashed study keeps what it did.
+  int exit_code = kExitOk;
+  bool interrupted = false;
+  try {
+    for (std::size_t i = 0; i < plan.size(); ++i) {
+      StudyRun& run = i == 0 ? study.reference : study.runs[i - 1];
+      const int code =
+          study_run(options.scene_path, plan[i].overrides, plan[i].label, options.quiet, err, run);
+      if (!options.quiet)
+        fmt::print(err, "emdae: {}: {} ({} steps, {:.3f} s)\n", plan[i].label, run.status,
+                   run.steps, run.cpu_seconds);
+      else if (!run.ok())
+        fmt::print(err, "emdae: {}: {}\n", plan[i].label, run.status);
+      evaluate_study(study);
+      write_study_tables(dir, study);
+      if (code == kExitInterrupted) {
+        interrupted = true;
+        break;
+      }
+      exit_code = worse(exit_code, code);
+    }
+    study.complete = !interrupted;
+    write_study_tables(dir, study);
+    write_study_report(dir, info, study);
+  } catch (const std::exception& e) {
+    fmt::print(err, "emdae: error: {}\n", e.what());
+    return kExitInternal;
+  }
+  if (!options.quiet || exit_code != kExitOk) {
+    print_study_table(out, study);
+    fmt::print(out, "  output: {}/{{study.csv,study.json,study.html}}\n", dir);
+  }
+  return interrupted ? kExitInterrupted : exit_code;
+}
+
+}  // namespace emdae

@@ -1,0 +1,337 @@
+#include "run/run.hpp"
+
+#include <fmt/format.h>
+
+#include <cmath>
+#include <ctime>
+#include <filesystem>
+#include <functional>
+#include <memory>
+
+#include "contact/mortar_contact.hpp"
+#include "run/describe.hpp"
+#include "verify/contact_pressure.hpp"
+#include "verify/history.hpp"
+#include "verify/report.hpp"
+#include "verify/vtu.hpp"
+
+namespace emdae {
+
+namespace {
+
+namespace fs = std::filesystem;
+
+double cpu_now() {
+  return static_cast<double>(std::clock()) / CLOCKS_PER_SEC;
+}
+
+// The observer of a run that has none.
+RunObserver& quiet_observer() {
+  static RunObserver none;
+  return none;
+}
+
+// Steps of the run: one per time step, or one per load increment.
+long planned_steps(const RunSettings& s) {
+  return s.static_only ? s.statics.settings.increments
+                       : static_cast<long>(std::ceil(s.time.t_end / s.time.dt - 1e-9));
+}
+
+// --- contact: the table and the pressure field ----------------------------------------
+
+// The active slave nodes of the model's contact pairs at `state`, with their
+// pressure: the rows of contact.csv (node: its index in the slave body's mesh).
+std::vector<ContactNode> contact_nodes(const Model& model, const State& state) {
+  std::vector<ContactNode> out;
+  for (const SlavePressure& p :
+       slave_pressures(model.system(), state.q, state.lambda, state.active)) {
+    for (const ContactPair& pair : model.contacts()) {
+      if (pair.set != p.set) continue;
+      const int offset = model.find_set(pair.slave, Model::SetKind::Edges).first->info.node_offset;
+      const Eigen::Vector2d x = state.q.segment<2>(2 * p.node);
+      out.push_back(
+          {pair.name, p.node - offset, x.x(), x.y(), p.gap, p.pressure, p.weight, p.force});
+    }
+  }
+  return out;
+}
+
+// p_A at every slave node (summed over the pairs a node is a slave of), zero
+// elsewhere: the VTU point field.
+Vec contact_pressure_field(const System& system, const State& state) {
+  Vec p = Vec::Zero(system.n_nodes());
+  for (const SlavePressure& x : slave_pressures(system, state.q, state.lambda, state.active))
+    p[x.node] += x.pressure;
+  return p;
+}
+
+// VTU output of a run; a failure to write fields is reported once and ends
+// the field output, not the run (history and summary are what it is judged by).
+class FieldOutput {
+ public:
+  FieldOutput(const Model& model, const RunSettings& settings, RunObserver& observer)
+      : observer_(observer) {
+    every_ = vtu_interval(settings.output.vtu_every, planned_steps(settings));
+    std::vector<VtuBody> bodies;
+    for (const auto& b : model.bodies())
+      if (b.mesh.n_elements() > 0)
+        bodies.push_back({b.name, b.mesh, b.info.node_offset, b.material});
+    if (settings.out_dir.empty() || bodies.empty() || every_ == 0) return;
+    try {
+      writer_ = std::make_unique<FieldWriter>(settings.out_dir, std::move(bodies), model.dim());
+      if (model.system().n_unilateral() > 0)
+        writer_->add_point_scalar("contact_pressure", [&system = model.system()](const State& s) {
+          return contact_pressure_field(system, s);
+        });
+    } catch (const std::exception& e) {
+      fail(e);
+    }
+  }
+  void maybe_write(const State& s, long step, bool last = false) {
+    if (!writer_ || (!last && step % every_ != 0) || step == written_) return;
+    try {
+      writer_->write(s, step);
+      written_ = step;
+    } catch (const std::exception& e) {
+      fail(e);
+    }
+  }
+  void close() {
+    if (!writer_) return;
+    try {
+      writer_->close();
+    } catch (const std::exception& e) {
+      fail(e);
+    }
+  }
+  bool active() const { return writer_ != nullptr; }
+
+ private:
+  void fail(const std::exception& e) {
+    observer_.warned(std::string("no further VTU fields: ") + e.what());
+    writer_.reset();
+  }
+  RunObserver& observer_;
+  long every_ = 0, written_ = -1;
+  std::unique_ptr<FieldWriter> writer_;
+};
+
+// --- the pieces of a run ----------------------------------------------------------------
+
+RunInfo run_info(const RunSettings& s) {
+  RunInfo info;
+  info.scene = s.name;
+  info.scheme = s.scheme;
+  info.source = s.source;
+  info.dt = s.time.dt;
+  info.t_end = s.time.t_end;
+  if (s.static_only) {
+    info.scheme = "static";
+    info.static_analysis = true;
+    info.increments = s.statics.settings.increments;
+    info.load_time = s.statics.settings.load_time.value_or(0.0);
+  }
+  return info;
+}
+
+// [statics]: the equilibrium (the bearing's pre-stress); the run starts
+// from it, at rest, with its active contact set. False when it failed, with
+// info.status saying why.
+bool solve_statics(Model& model, const RunSettings& settings, State& state, RunInfo& info,
+                   const StaticObserver& on_increment = {}) {
+  const EquilibriumSettings& eq = settings.statics;
+  if (!eq.enabled) return true;
+  const double start = cpu_now();
+  StaticResult r;
+  try {
+    std::vector<std::vector<int>> holds;
+    for (const auto& set : eq.hold_rotation) holds.push_back(model.nodes(set));
+    r = solve_static(model.system(), state, eq.settings, holds, on_increment);
+  } catch (const std::exception& e) {
+    r.message = std::string("static solve: ") + e.what();
+  }
+  StaticsOutcome st;
+  st.converged = r.converged;
+  st.steps = r.steps;  // over all load increments
+  st.newton_iterations = r.newton_iterations;
+  st.change = r.change;
+  st.holds = eq.hold_rotation;
+  st.holding_moments = r.holding_moments;
+  st.increments = r.increments;
+  st.active_contacts = static_cast<int>(state.active.size());
+  st.cpu_seconds = cpu_now() - start;
+  st.message = r.message;
+  info.statics = st;
+  if (!r.converged) info.status = r.message;
+  return r.converged;
+}
+
+struct Interrupted : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+// The time loop: each accepted step goes to the recorder, then to
+// `on_sample`; the observer may end it between steps. Sets info.status and
+// info.cpu_seconds (the process CPU time of the loop).
+RunResult::End integrate_model(Stepper& stepper, State& state, const TimeSettings& time,
+                               Recorder& recorder, RunInfo& info, RunObserver& observer,
+                               const std::function<void(const State&, const Sample&)>& on_sample) {
+  RunResult::End end = RunResult::End::Finished;
+  const double cpu_start = cpu_now();
+  try {
+    const RunOutcome outcome =
+        integrate(stepper, state, time, [&](const State& s, const AcceptedStep& step) {
+          on_sample(s, recorder.observe(s, step));
+          if (observer.interrupted())
+            throw Interrupted("interrupted at t = " + fmt::format("{}", s.t));
+        });
+    info.status = outcome.message;
+    if (!outcome.ok) end = RunResult::End::Failed;
+  } catch (const Interrupted& e) {
+    info.status = e.what();
+    end = RunResult::End::Interrupted;
+  } catch (const std::exception& e) {
+    info.status = std::string("internal error: ") + e.what();
+    end = RunResult::End::InternalError;
+  }
+  info.cpu_seconds = cpu_now() - cpu_start;
+  return end;
+}
+
+}  // namespace
+
+void create_output_folder(const std::string& dir) {
+  std::error_code ec;
+  fs::create_directories(dir, ec);
+  if (ec || !fs::is_directory(dir))
+    throw OutputError(fmt::format("cannot create output folder '{}': {}", dir,
+                                  ec ? ec.message() : "exists and is not a folder"));
+}
+
+std::string scheme_refusal(const Model& model, const RunSettings& settings) {
+  // A static analysis has no scheme: the static solve makes its own steps.
+  if (settings.static_only) return {};
+  try {
+    make_stepper(settings.scheme, model.system(), settings.schemes);
+  } catch (const std::invalid_argument& e) {
+    return fmt::format("scheme '{}' cannot run scene '{}': {}", settings.scheme, settings.name,
+                       e.what());
+  }
+  return {};
+}
+
+RunResult run(Model& model, const RunSettings& settings, RunObserver* watcher) {
+  RunObserver& observer = watcher ? *watcher : quiet_observer();
+  const System& system = model.system();
+  const std::string& dir = settings.out_dir;
+  const bool writes = !dir.empty();
+  if (writes) create_output_folder(dir);
+  const auto path = [&dir](const char* file) { return (fs::path(dir) / file).string(); };
+
+  RunResult result;
+  State& state = result.state;
+  state = initial_state(system);
+  // A static analysis starts at rest (prescribed motions have no velocity).
+  if (settings.static_only) state.v.setZero();
+  RunInfo info = run_info(settings);
+  // A dynamic run starts from the equilibrium of its [statics], at rest.
+  if (!settings.static_only && !solve_statics(model, settings, state, info))
+    result.end = RunResult::End::Failed;
+  Recorder recorder(system, state);
+  recorder.set_load_free_test([&model](double a, double b) { return model.loads_vanish(a, b); });
+  std::unique_ptr<HistoryWriter> history;
+  if (writes) {
+    try {
+      history = std::make_unique<HistoryWriter>(
+          path("history.csv"), system.dim(), recorder.has_external_work(), recorder.has_contact());
+      history->write(recorder.initial());
+    } catch (const std::exception& e) {
+      throw OutputError(e.what());
+    }
+  }
+  FieldOutput fields(model, settings, observer);
+  fields.maybe_write(state, 0);
+
+  long last_written = 0;
+  // A history row every `output.every` steps (and at `last`), and the fields.
+  const auto keep = [&](const State& s, const Sample& sample, bool last) {
+    if (history && (last || sample.step % settings.output.every == 0)) {
+      history->write(sample);
+      last_written = sample.step;
+    }
+    fields.maybe_write(s, sample.step, last);
+    observer.sampled(s, sample, recorder);
+  };
+  // The contact table: the last state's, or for a static analysis the last
+  // equilibrium's (a failed increment leaves no pressure worth the name).
+  const bool has_contact = !model.contacts().empty();
+  std::optional<std::vector<ContactNode>> contact;
+  const auto take_contact = [&](const State& s) {
+    if (!has_contact) return;
+    try {
+      contact = contact_nodes(model, s);
+    } catch (const std::exception& e) {
+      observer.warned(std::string("no contact pressure: ") + e.what());
+    }
+  };
+  if (settings.static_only) {
+    // The static solve is the run: a history row and fields per load increment.
+    const int increments = settings.statics.settings.increments;
+    double t_previous = state.t;
+    if (has_contact) contact.emplace();
+    if (!solve_statics(model, settings, state, info,
+                       [&](const State& s, const StaticIncrement& inc) {
+                         AcceptedStep step;
+                         step.dt = inc.t - t_previous;
+                         t_previous = inc.t;
+                         step.stats.converged = true;
+                         step.stats.iterations = static_cast<int>(inc.newton_iterations);
+                         keep(s, recorder.observe(s, step), inc.index == increments);
+                         take_contact(s);
+                       }))
+      result.end = RunResult::End::Failed;
+    if (info.statics) info.cpu_seconds = info.statics->cpu_seconds;
+  } else {
+    observer.started(state.t, settings.time.t_end);
+    // A failed static solve leaves nothing to integrate from.
+    if (result.finished()) {
+      // Made after the equilibrium, which added and removed constraints of its own.
+      const auto stepper = make_stepper(settings.scheme, system, settings.schemes);
+      result.end =
+          integrate_model(*stepper, state, settings.time, recorder, info, observer,
+                          [&](const State& s, const Sample& sample) { keep(s, sample, false); });
+    }
+    observer.finished();
+    // The last state always ends the fields too.
+    fields.maybe_write(state, recorder.last().step, true);
+    take_contact(state);
+  }
+  fields.close();
+  std::vector<std::string> pair_names;
+  for (const auto& c : model.contacts()) pair_names.push_back(c.name);
+  if (contact) info.contact_pressure = pair_pressures(pair_names, *contact);
+
+  // The last state always ends the history, whatever `every` is.
+  if (history) {
+    if (recorder.last().step != last_written) history->write(recorder.last());
+    history->close();
+  }
+  result.summary = summarize(info, system, recorder, settings.tolerances);
+  result.fields = fields.active();
+  result.contact_table = writes && contact.has_value();
+  if (!writes) return result;
+  if (contact) write_contact_table(path("contact.csv"), *contact);
+  write_summary(path("summary.json"), result.summary);
+  try {
+    ReportInfo report = report_info(model, settings);
+    if (contact) report.files.push_back("contact.csv");
+    if (fields.active()) report.files.push_back("fields.pvd");
+    write_report(dir, report, result.summary);
+  } catch (const std::exception& e) {
+    // The run is judged by history and summary; a report is their view.
+    observer.warned(std::string("no report: ") + e.what());
+  }
+  return result;
+}
+
+}  // namespace emdae

@@ -1,0 +1,115 @@
+// A run of a model: what `emdae run` does, as one call of the library.
+//
+//   model ──> [statics] ──> time loop (or the load increments of a static
+//             equilibrium    analysis), each accepted step measured by the
+//                            Recorder
+//         ──> history.csv (a row every output.every steps), VTU fields,
+//             contact.csv, summary.json, report.html in settings.out_dir
+//
+// The scheme is named in the settings and its stepper made here, after the
+// equilibrium of [statics] (which adds and removes constraints of its own).
+// Progress and interruption are the observer's: the run tells it every
+// sample and asks it between steps whether to stop. Nothing here writes to
+// a terminal or installs a signal handler.
+//
+//   RunSettings settings;
+//   settings.time = {0.01, 20.0};
+//   settings.out_dir = "out/ring_impact";
+//   const RunResult result = run(model, settings);
+//   std::cout << result.summary.energy_rel_error_max << "\n";
+#pragma once
+
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "core/model.hpp"
+#include "integrators/driver.hpp"
+#include "integrators/schemes.hpp"
+#include "integrators/statics.hpp"
+#include "verify/recorder.hpp"
+#include "verify/summary.hpp"
+
+namespace emdae {
+
+struct OutputSettings {
+  int every = 1;  // a history row every `every` accepted steps (and the last)
+  // VTU fields of the bodies every `vtu_every` steps (and the first and last);
+  // -1: automatic (about 100 files over the run), 0: none.
+  long vtu_every = -1;
+};
+
+/// An equilibrium solved before the dynamics, or the whole of a static
+/// analysis (RunSettings::static_only).
+struct EquilibriumSettings {
+  bool enabled = false;
+  StaticSettings settings;                 // settings.load_time is always set (default 0)
+  std::vector<std::string> hold_rotation;  // node sets "body.set" whose rotation is held
+};
+
+struct RunSettings {
+  /// What the summary and the report call the run and where it came from.
+  std::string name = "run", description, source;
+  /// The scheme (known_schemes()) and the settings of every scheme.
+  std::string scheme = "em";
+  SchemeSettings schemes;
+  TimeSettings time;
+  /// No time steps: the equilibrium of `statics` is the run (one history
+  /// row per load increment).
+  bool static_only = false;
+  EquilibriumSettings statics;
+  OutputSettings output;
+  Tolerances tolerances;
+  /// Where history.csv, summary.json, report.html, contact.csv and the VTU
+  /// fields go (created when missing); empty: nothing is written.
+  std::string out_dir;
+};
+
+/// Watches a run: progress, interruption, what went wrong on the side.
+class RunObserver {
+ public:
+  virtual ~RunObserver() = default;
+  /// The time loop starts at t_start (after [statics]) and runs to t_end.
+  virtual void started(double /*t_start*/, double /*t_end*/) {}
+  /// After every accepted step (static analysis: load increment).
+  virtual void sampled(const State& /*state*/, const Sample& /*sample*/,
+                       const Recorder& /*recorder*/) {}
+  /// Asked after every accepted step: true ends the run, interrupted.
+  virtual bool interrupted() { return false; }
+  /// Something that costs part of the output but not the run (a VTU file
+  /// that could not be written, no report).
+  virtual void warned(const std::string& /*message*/) {}
+  /// The time loop is over; summary and report follow.
+  virtual void finished() {}
+};
+
+/// The output folder or the history cannot be created: nothing was run.
+class OutputError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+struct RunResult {
+  enum class End { Finished, Failed, Interrupted, InternalError };
+  End end = End::Finished;
+  Summary summary;                             // summary.status says how it ended
+  State state;                                 // the last state reached
+  bool fields = false, contact_table = false;  // fields.pvd, contact.csv written
+  bool finished() const { return end == End::Finished; }
+};
+
+/// Creates the folder `dir` (and its parents) unless it is there; throws
+/// OutputError naming it and why not.
+void create_output_folder(const std::string& dir);
+
+/// Why `scheme` cannot run the model (the stepper refuses it), or "".
+std::string scheme_refusal(const Model& model, const RunSettings& settings);
+
+/// Runs the model: [statics], the time loop (or the load increments of a
+/// static analysis), history, fields, contact table, summary and report.
+/// Throws OutputError when its output cannot be created (then nothing ran),
+/// and std::runtime_error when summary.json cannot be written.
+RunResult run(Model& model, const RunSettings& settings, RunObserver* observer = nullptr);
+
+}  // namespace emdae
