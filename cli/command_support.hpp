@@ -9,7 +9,7 @@
 #include <vector>
 
 #include "cli/commands.hpp"
-#include "cli/scene.hpp"
+#include "scene/scene.hpp"
 
 namespace emdae {
 

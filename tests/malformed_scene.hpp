@@ -10,7 +10,7 @@
 #include <string>
 #include <vector>
 
-#include "cli/scene.hpp"
+#include "scene/scene.hpp"
 #include "temp_dir.hpp"
 
 namespace emdae::test_systems {

@@ -13,8 +13,8 @@
 #include <string>
 #include <vector>
 
-#include "cli/scene.hpp"
 #include "integrators/stepper.hpp"
+#include "scene/scene.hpp"
 #include "temp_dir.hpp"
 #include "verify/history.hpp"
 #include "verify/recorder.hpp"

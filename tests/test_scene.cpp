@@ -11,9 +11,9 @@
 #include <string>
 #include <vector>
 
-#include "cli/scene.hpp"
 #include "integrators/stepper.hpp"
 #include "malformed_scene.hpp"
+#include "scene/scene.hpp"
 #include "temp_dir.hpp"
 #include "verify/recorder.hpp"
 

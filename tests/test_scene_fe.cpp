@@ -18,7 +18,6 @@
 #include <string>
 #include <vector>
 
-#include "cli/scene.hpp"
 #include "core/quantities.hpp"
 #include "fe_scenes.hpp"
 #include "integrators/driver.hpp"
@@ -26,6 +25,7 @@
 #include "integrators/stepper.hpp"
 #include "malformed_scene.hpp"
 #include "paper_scenes.hpp"
+#include "scene/scene.hpp"
 #include "temp_dir.hpp"
 #include "verify/recorder.hpp"
 

@@ -3,7 +3,7 @@
 // validated exactly like the file's own values.
 #include <cctype>
 
-#include "cli/toml_fields.hpp"
+#include "scene/toml_fields.hpp"
 
 namespace emdae::scene_reader {
 

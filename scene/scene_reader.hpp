@@ -8,7 +8,7 @@
 #include <string_view>
 #include <vector>
 
-#include "cli/toml_fields.hpp"
+#include "scene/toml_fields.hpp"
 
 namespace emdae::scene_reader {
 

@@ -1,6 +1,6 @@
 // The scene reader: the table of sections in the order they are read, and
 // the whole read of a file (TOML parse, overrides, sections, last checks).
-#include "cli/scene_reader.hpp"
+#include "scene/scene_reader.hpp"
 
 #include <cerrno>
 #include <cstring>

@@ -14,7 +14,7 @@
 #include <string_view>
 #include <vector>
 
-#include "cli/scene.hpp"
+#include "scene/scene.hpp"
 
 namespace emdae::scene_reader {
 

@@ -3,8 +3,8 @@
 // [tolerances]. They fill RunSettings (run/run.hpp) under the same names.
 #include <cctype>
 
-#include "cli/scene_reader.hpp"
 #include "integrators/contact_step.hpp"
+#include "scene/scene_reader.hpp"
 
 namespace emdae::scene_reader {
 

@@ -4,9 +4,9 @@
 #include <cmath>
 #include <filesystem>
 
-#include "cli/scene_reader.hpp"
 #include "contact/contact_pair.hpp"
 #include "core/gmsh_reader.hpp"
+#include "scene/scene_reader.hpp"
 
 namespace emdae::scene_reader {
 

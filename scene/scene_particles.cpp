@@ -1,6 +1,6 @@
 // [[particles]], [[springs]], [[links]], [[anchors]] and [gravity]: calls on
 // the Model (core/model.hpp), which makes the terms and checks them.
-#include "cli/scene_reader.hpp"
+#include "scene/scene_reader.hpp"
 
 namespace emdae::scene_reader {
 

@@ -1,4 +1,4 @@
-#include "cli/toml_fields.hpp"
+#include "scene/toml_fields.hpp"
 
 #include <cctype>
 #include <sstream>
