@@ -1,3 +1,9 @@
+// The IDA stepper (ida_stepper.hpp): the time derivatives the Term interface
+// lacks, the consistent start, and the driver: IDA's allocation and
+// (re)starts with the active set settled, the loads' quadratures, contact
+// events and step(). The GGL system that IDA calls back (residual, Jacobian,
+// root functions) is in ida_residual.cpp; the state both share,
+// IdaStepper::Impl, in ida_stepper_impl.hpp.
 #include "integrators/ida_stepper.hpp"
 
 #include <ida/ida.h>
@@ -20,14 +26,18 @@
 #include "core/assembly.hpp"
 #include "core/gradient.hpp"
 #include "core/quantities.hpp"
+#include "integrators/ida_stepper_impl.hpp"
 #include "integrators/klu_solver.hpp"
 #include "integrators/sundials_support.hpp"
 
 namespace emdae {
 
+using ida_detail::prescribed_velocity;
+using ida_detail::view;
+
 namespace {
 
-// --- SUNDIALS: owners and checks (integrators/sundials_support.hpp) ---------
+// --- SUNDIALS: checks (integrators/sundials_support.hpp) -------------------
 
 using sundials::check;
 using sundials::check_ptr;
@@ -37,14 +47,6 @@ void check_ida(int flag, const char* call) {
 }
 void check_ls(int flag, const char* call) {
   check(flag, call, IDAGetLinReturnFlagName);
-}
-using ContextPtr = sundials::Context;
-using VectorPtr = sundials::Vector;
-using MatrixPtr = sundials::Matrix;
-using IdaPtr = sundials::Memory<IDAFree>;
-
-Eigen::Map<Vec> view(N_Vector v) {
-  return {N_VGetArrayPointer(v), N_VGetLength(v)};
 }
 
 // Central differences in t for the second derivative (start values only):
@@ -58,12 +60,6 @@ double phi_tt(const Term& c, const Vec& ql, double t) {
   return (c.value(ql, t + h) - 2 * c.value(ql, t) + c.value(ql, t - h)) / (h * h);
 }
 
-double prescribed_position(const PrescribedDof& p, double t, double fixed) {
-  return p.position ? p.position(t) : fixed;
-}
-double prescribed_velocity(const PrescribedDof& p, double t) {
-  return p.velocity ? p.velocity(t) : 0.0;
-}
 double prescribed_acceleration(const PrescribedDof& p, double t) {
   if (!p.velocity) return 0.0;
   const double h = time_step_second(t);
@@ -245,475 +241,218 @@ ConsistentStart consistent_start(const System& s, double t, const Vec& q, const 
 }
 
 // --- the IDA driver ---------------------------------------------------------
+// (Re)allocates everything whose size is that of the DAE (2n + 2m) for the
+// current active set; y0 = (q, v, lambda, mu) gives the Jacobian's pattern.
+void IdaStepper::Impl::allocate(double t, const Vec& y0) {
+  if (mem) retire_counters();
+  mem.reset();
+  klu.reset();
+  jmat.reset();
+  m = m_sys + static_cast<int>(active.size());
+  size = 2 * n + 2 * m;
+  for (sundials::Vector* p : {&yy, &yp, &id, &yq, &ypq})
+    *p = sundials::make_vector(size, ctx.get());
+  // Differential: free q and v. Algebraic (no error test): lambda, mu and
+  // the prescribed q_i, v_i.
+  auto ids = view(id.get());
+  ids.setZero();
+  for (int i = 0; i < n; ++i)
+    if (free_dof(i)) ids[i] = ids[n + i] = 1.0;
+  view(yy.get()) = y0;
+  jacobian(t, 1.0, view(yy.get()));
+  jmat.reset(
+      check_ptr(SUNSparseMatrix(size, size, std::max<long>(1, jac.nonZeros()), CSC_MAT, ctx.get()),
+                "SUNSparseMatrix"));
+  klu = std::make_unique<KluSolver>(ctx.get(), KluSolver::Ordering::Colamd,
+                                    KluSolver::Pivoting::EverySetup);
+}
 
-namespace {
-// Root function of a candidate that is not engaged (gap +infinity): a large
-// finite value of the same sign, which never makes a root.
-constexpr double kFarGap = 1e30;
-}  // namespace
+// IDA's own first step makes ||h0 y'||_WRMS = 1/2, which at tight
+// tolerances is ~1e-10: there the index-2 iteration matrix (condition
+// ~1/h^2) leaves the multipliers to round-off and the corrector fails. The
+// first BDF1 step's local error is ~h^2/2 q'' on q, so h0 = (max_i |a_i|
+// w_i)^(-1/2) (w the error weights) passes the error test by construction
+// at a far better-conditioned h. At most the requested interval.
+double IdaStepper::Impl::initial_step(const ConsistentStart& c, double interval) const {
+  double r = 0.0;
+  for (int i = 0; i < n; ++i)
+    if (free_dof(i)) r = std::max(r, std::abs(c.a[i]) / (set.rtol * std::abs(c.q[i]) + set.atol));
+  return r > 0 ? std::min(interval, 1.0 / std::sqrt(r)) : 0.0;  // 0: IDA's own
+}
 
-struct IdaStepper::Impl {
-  Impl(const System& system, IdaSettings settings)
-      : s(system),
-        set(settings),
-        n(system.n_dofs()),
-        m_sys(system.n_constraints()),
-        n_cand(system.n_unilateral()),
-        gap_tol(settings.gap_tolerance > 0 ? settings.gap_tolerance : 10 * settings.atol),
-        assembler(system),
-        disarmed(static_cast<std::size_t>(system.n_unilateral()), 0) {}
-
-  const System& s;
-  IdaSettings set;
-  const int n, m_sys, n_cand;
-  int m = 0, size = 0;  // constraints (the system's, then the active contacts), unknowns
-  double gap_tol;
-  Assembler assembler;  // potentials and mass only
-  TermWorkspace ws;
-
-  // Contact: the active candidates in the order of their multipliers, their
-  // terms for the prepared step, and the candidates whose gap root is moved
-  // to gap = -gap_tol (see the header: chattering guard).
-  std::vector<int> active;
-  std::vector<const Term*> extra;
-  std::vector<char> disarmed;
-
-  // Declared in creation order: destroyed in reverse, IDA memory first and
-  // the context last.
-  ContextPtr ctx;
-  VectorPtr yy, yp, id, yq, ypq;
-  MatrixPtr jmat;
-  std::unique_ptr<KluSolver> klu;
-  IdaPtr mem;
-
-  bool need_restart = true;
-  // The state handed out last; anything else is a state changed from outside.
-  double t_out = 0.0;
-  Vec q_out, v_out;
-  std::vector<int> active_out;
-  Vec q_start;  // positions of prescribed dofs without g(t) stay at these
-
-  // A root returned by IDA and not yet acted upon (it may lie beyond the
-  // output time of the call that found it: then it is handled at the start
-  // of the next call, which continues from it).
-  bool pending = false;
-  double t_root = 0.0;
-  Vec y_root;
-  std::vector<int> roots_found;
-
-  // Callback state: exceptions are parked here and rethrown after IDASolve.
-  std::exception_ptr error;
-  std::string last_message;
-
-  // Scratch.
-  Vec q, v, f, load, ql, vl, grad, gt, rq;
-  Mat hess;
-  Triplets trip, tmp;
-  SparseMatrix jac;
-
-  // Counters of earlier IDA lives (IDAReInit resets IDA's own).
-  long n_inits = 0, steps_before = 0, jacs_before = 0, iters_before = 0;
-
-  const Term& constraint(int l) const {
-    return l < m_sys ? *s.constraints()[static_cast<std::size_t>(l)]
-                     : *extra[static_cast<std::size_t>(l - m_sys)];
-  }
-  bool free_dof(int i) const { return !s.is_prescribed()[static_cast<std::size_t>(i)]; }
-  bool is_active(int cand) const {
-    return std::find(active.begin(), active.end(), cand) != active.end();
-  }
-  bool engaged(int cand, const Vec& x) const {
-    return s.unilateral_term(cand) != nullptr && std::isfinite(s.unilateral_gap(cand, x));
-  }
-  void refresh_terms() {
-    extra.clear();
-    for (int cand : active) {
-      const Term* t = s.unilateral_term(cand);
-      if (!t) throw std::logic_error("IdaStepper: active candidate without a function");
-      extra.push_back(t);
+// Consistent values for the active set, settled in two phases.
+//  1. Impact: the velocity projection at (q0, v0) is the impulse of the
+//     entering candidates (perfectly inelastic); one whose impulse is
+//     tensile (it was not approaching: the projection would pull it back)
+//     is dropped, most tensile first, and the projection redone.
+//  2. Forces: from the projected (q, v), an active candidate whose
+//     multiplier is tensile is released, most tensile first; its normal
+//     velocity is zero already, so the remaining projection changes
+//     nothing and it separates by its acceleration.
+// Returns the number of candidates released that were active before.
+int IdaStepper::Impl::settle(double t, const Vec& q0, const Vec& v0, std::vector<int> entering,
+                             ConsistentStart& c) {
+  int releases = 0;
+  const int limit = 2 * n_cand + 4;
+  auto drop = [&](std::size_t k) {
+    const int cand = active[k];
+    if (std::find(entering.begin(), entering.end(), cand) == entering.end()) ++releases;
+    entering.erase(std::remove(entering.begin(), entering.end(), cand), entering.end());
+    active.erase(active.begin() + static_cast<std::ptrdiff_t>(k));
+  };
+  for (int it = 0;; ++it) {  // 1. impact
+    if (it > limit) throw std::runtime_error("IdaStepper: impact set did not settle");
+    refresh_terms();
+    c = consistent_start(s, t, q0, v0, extra);
+    std::size_t worst = active.size();
+    double worst_value = 0.0;
+    for (std::size_t k = 0; k < active.size(); ++k) {
+      const double kappa = c.impulse[m_sys + static_cast<Eigen::Index>(k)];
+      if (kappa > worst_value &&
+          std::find(entering.begin(), entering.end(), active[k]) != entering.end())
+        worst = k, worst_value = kappa;
     }
+    if (worst == active.size()) break;
+    drop(worst);
   }
-
-  // F(t, y, y') of the header's GGL system. With prescribed_rows = false the
-  // velocity rows of prescribed dofs keep M v' + grad V + G^T lambda - f (the
-  // support reaction) instead of v - g'.
-  void residual(double t, const Eigen::Map<Vec>& y, const Eigen::Map<Vec>& ydot, Eigen::Map<Vec> r,
-                bool prescribed_rows = true) {
-    q = y.segment(0, n);
-    v = y.segment(n, n);
-    const auto lambda = y.segment(2 * n, m);
-    const auto mu = y.segment(2 * n + m, m);
-    r.segment(0, n) = ydot.segment(0, n) - v;
-    f = s.mass() * ydot.segment(n, n);
-    assembler.add_potential_forces(GradientKind::Exact, q, q, t, t, f, nullptr);
-    if (!s.loads().empty()) {
-      load.setZero(n);
-      s.add_load_forces(q, t, load);
-      f -= load;
+  const Vec q1 = c.q, v1 = c.v;
+  for (int it = 0;; ++it) {  // 2. forces
+    if (it > limit) throw std::runtime_error("IdaStepper: active set did not settle");
+    std::size_t worst = active.size();
+    double worst_value = 0.0;
+    for (std::size_t k = 0; k < active.size(); ++k) {
+      const double lambda = c.lambda[m_sys + static_cast<Eigen::Index>(k)];
+      if (lambda > worst_value) worst = k, worst_value = lambda;
     }
-    r.segment(n, n) = f;
-    for (int l = 0; l < m; ++l) {
-      const Term& c = constraint(l);
-      gather(c, q, ql);
-      gather(c, v, vl);
-      term_gradient(c, GradientKind::Exact, ql, ql, t, t, grad, nullptr, ws);
-      const auto& dofs = c.dofs();
-      for (std::size_t i = 0; i < dofs.size(); ++i) {
-        const double g = grad[static_cast<Eigen::Index>(i)];
-        r[dofs[i]] += mu[l] * g;
-        r[n + dofs[i]] += lambda[l] * g;
-      }
-      r[2 * n + l] = c.value(ql, t);
-      r[2 * n + m + l] = grad.dot(vl) + (c.depends_on_time() ? constraint_rate(c, ql, t) : 0.0);
+    if (worst == active.size()) return releases;
+    drop(worst);
+    refresh_terms();
+    c = consistent_start(s, t, q1, v1, extra);
+  }
+}
+
+// (Re)starts IDA at (t, q, v) with the current active set (`entering`: the
+// candidates just added), projecting and settling it first; returns the
+// releases made while settling.
+int IdaStepper::Impl::restart(double t, const Vec& q0, const Vec& v0,
+                              const std::vector<int>& entering, double interval) {
+  ConsistentStart c;
+  const int releases = settle(t, q0, v0, entering, c);
+  const int m_new = m_sys + static_cast<int>(active.size());
+  // Candidates that are closed but not active get their root at -gap_tol.
+  for (int cand = 0; cand < n_cand; ++cand)
+    disarmed[static_cast<std::size_t>(cand)] =
+        !is_active(cand) && s.unilateral_gap(cand, c.q) <= gap_tol;
+  q_start = c.q;
+  Vec y0(2 * n + 2 * m_new), yd0(2 * n + 2 * m_new);
+  y0 << c.q, c.v, c.lambda, Vec::Zero(m_new);
+  yd0 << c.v, c.a, Vec::Zero(m_new), Vec::Zero(m_new);
+  const bool fresh = !mem || m_new != m;
+  if (fresh) allocate(t, y0);
+  view(yy.get()) = y0;
+  view(yp.get()) = yd0;
+  if (fresh) {
+    mem.reset(check_ptr(IDACreate(ctx.get()), "IDACreate"));
+    void* p = mem.get();
+    check_ida(IDASetErrHandlerFn(p, &Impl::error_cb, this), "IDASetErrHandlerFn");
+    check_ida(IDAInit(p, &Impl::residual_cb, t, yy.get(), yp.get()), "IDAInit");
+    check_ida(IDASStolerances(p, set.rtol, set.atol), "IDASStolerances");
+    check_ida(IDASetUserData(p, this), "IDASetUserData");
+    check_ida(IDASetId(p, id.get()), "IDASetId");
+    check_ida(IDASetSuppressAlg(p, SUNTRUE), "IDASetSuppressAlg");
+    check_ida(IDASetMaxOrd(p, set.max_order), "IDASetMaxOrd");
+    // One internal step per IDASolve call (IDA_ONE_STEP): the budget of
+    // step() is counted there.
+    check_ida(IDASetMaxNumSteps(p, set.max_steps), "IDASetMaxNumSteps");
+    check_ls(IDASetLinearSolver(p, klu->get(), jmat.get()), "IDASetLinearSolver");
+    check_ls(IDASetJacFn(p, &Impl::jacobian_cb), "IDASetJacFn");
+    if (n_cand > 0) {
+      check_ida(IDARootInit(p, n_cand, &Impl::root_cb), "IDARootInit");
+      std::vector<int> dir(static_cast<std::size_t>(n_cand), -1);
+      check_ida(IDASetRootDirection(p, dir.data()), "IDASetRootDirection");
+      check_ida(IDASetNoInactiveRootWarn(p), "IDASetNoInactiveRootWarn");
     }
-    for (const auto& p : s.prescribed()) {
-      r[p.dof] = q[p.dof] - prescribed_position(p, t, q_start[p.dof]);
-      if (prescribed_rows) r[n + p.dof] = v[p.dof] - prescribed_velocity(p, t);
-    }
+  } else {
+    retire_counters();
+    check_ida(IDAReInit(mem.get(), t, yy.get(), yp.get()), "IDAReInit");
   }
+  check_ida(IDASetInitStep(mem.get(), initial_step(c, interval)), "IDASetInitStep");
+  ++n_inits;
+  need_restart = false;
+  pending = false;
+  return releases;
+}
 
-  // J = dF/dy + cj dF/dy'. Every entry is emitted whatever its value, so the
-  // pattern is the same at every call and KLU refactors numerically only
-  // (it changes with the active set, the contact search and a load whose
-  // derivative vanishes: KluSolver::load then has KLU analyse it anew).
-  void jacobian(double t, double cj, const Eigen::Map<Vec>& y) {
-    q = y.segment(0, n);
-    v = y.segment(n, n);
-    const auto lambda = y.segment(2 * n, m);
-    const auto mu = y.segment(2 * n + m, m);
-    trip.clear();
-    for (int i = 0; i < n; ++i) {
-      if (free_dof(i)) {
-        trip.emplace_back(i, i, cj);  // q'
-        trip.emplace_back(i, n + i, -1.0);
-      } else {
-        trip.emplace_back(i, i, 1.0);
-        trip.emplace_back(n + i, n + i, 1.0);
-      }
-    }
-    assembler.add_mass(trip, cj, n);  // (F_v, v') block, free rows
-    tmp.clear();
-    f.setZero(n);
-    assembler.add_potential_forces(GradientKind::Exact, q, q, t, t, f, &tmp);
-    if (!s.loads().empty()) s.add_load_forces(q, t, f, &tmp, -1.0);  // -df/dq, free rows
-    for (const auto& e : tmp) trip.emplace_back(n + e.row(), e.col(), e.value());
-    for (int l = 0; l < m; ++l) {
-      const Term& c = constraint(l);
-      gather(c, q, ql);
-      gather(c, v, vl);
-      term_gradient(c, GradientKind::Exact, ql, ql, t, t, grad, &hess, ws);
-      const bool timed = c.depends_on_time();
-      if (timed) constraint_gradient_rate(c, ql, t, gt, ws);
-      const auto& dofs = c.dofs();
-      const Vec hv = hess * vl;
-      for (std::size_t a = 0; a < dofs.size(); ++a) {
-        const auto ia = static_cast<Eigen::Index>(a);
-        const long da = dofs[a];
-        if (free_dof(dofs[a])) {
-          for (std::size_t b = 0; b < dofs.size(); ++b) {
-            const double h = hess(ia, static_cast<Eigen::Index>(b));
-            trip.emplace_back(da, dofs[b], mu[l] * h);          // (F_q, q)
-            trip.emplace_back(n + da, dofs[b], lambda[l] * h);  // (F_v, q)
-          }
-          trip.emplace_back(da, 2 * n + m + l, grad[ia]);  // (F_q, mu)
-          trip.emplace_back(n + da, 2 * n + l, grad[ia]);  // (F_v, lambda)
-        }
-        trip.emplace_back(2 * n + l, da, grad[ia]);                             // (Phi, q)
-        trip.emplace_back(2 * n + m + l, da, hv[ia] + (timed ? gt[ia] : 0.0));  // (Gv, q)
-        trip.emplace_back(2 * n + m + l, n + da, grad[ia]);                     // (Gv, v)
-      }
-    }
-    jac.resize(size, size);
-    jac.setFromTriplets(trip.begin(), trip.end());
-    jac.makeCompressed();
+bool IdaStepper::Impl::continues(const State& st) const {
+  return !need_restart && st.t == t_out && same(st.q, q_out) && same(st.v, v_out) &&
+         st.active == active_out;
+}
+
+// --- quadratures of the loads over the step -------------------------------
+// Simpson's rule on each piece [a, b] of IDA's internal steps (the dense
+// output of the step that covers it at a, (a + b)/2, b): the work of the
+// loads int f . v dt, and the impulse of the loads and supports int (f + R)
+// dt with its moment int x x (f + R) dt (R = M v' + grad V + G^T lambda - f
+// on the prescribed rows: the support reaction).
+bool IdaStepper::Impl::has_quadrature() const {
+  return !s.loads().empty() || !s.prescribed().empty();
+}
+
+void IdaStepper::Impl::quadrature_point(double t, double& power, Vec& impulse, Vec& angular) {
+  check_ida(IDAGetDky(mem.get(), t, 0, yq.get()), "IDAGetDky");
+  check_ida(IDAGetDky(mem.get(), t, 1, ypq.get()), "IDAGetDky");
+  const auto y = view(yq.get());
+  const Vec x = y.head(n), u = y.segment(n, n);
+  Vec density = Vec::Zero(n);
+  if (!s.loads().empty()) s.add_load_forces(x, t, density);
+  power = density.dot(u);
+  if (!s.prescribed().empty()) {
+    rq.resize(size);
+    residual(t, y, view(ypq.get()), Eigen::Map<Vec>(rq.data(), size), false);
+    for (const auto& p : s.prescribed()) density[p.dof] += rq[n + p.dof];
   }
+  resultant_and_moment(s.dim(), x, density, impulse, angular);
+}
 
-  // Root functions, one per candidate: -lambda_k for an active one (a
-  // release when lambda turns tensile), its gap for an inactive one (an
-  // impact), gap + gap_tol while it is disarmed; all with direction -1.
-  void roots(double, const Eigen::Map<Vec>& y, realtype* g) {
-    q = y.segment(0, n);
-    for (int cand = 0; cand < n_cand; ++cand) g[cand] = kFarGap;
-    for (std::size_t k = 0; k < active.size(); ++k)
-      g[active[k]] = -y[2 * n + m_sys + static_cast<Eigen::Index>(k)];
-    for (int cand = 0; cand < n_cand; ++cand) {
-      if (is_active(cand)) continue;
-      const double gap = s.unilateral_gap(cand, q);
-      if (std::isfinite(gap) && gap < kFarGap)
-        g[cand] = gap + (disarmed[static_cast<std::size_t>(cand)] ? gap_tol : 0.0);
-    }
-  }
+void IdaStepper::Impl::integrate_loads(double a, double b, StepStats& stats) {
+  if (!has_quadrature() || !(b > a)) return;
+  double p[3];
+  Vec imp[3], ang[3];
+  const double ts[3] = {a, 0.5 * (a + b), b};
+  for (int k = 0; k < 3; ++k) quadrature_point(ts[k], p[k], imp[k], ang[k]);
+  const double w = (b - a) / 6;
+  stats.external_work += w * (p[0] + 4 * p[1] + p[2]);
+  stats.external_impulse += w * (imp[0] + 4 * imp[1] + imp[2]);
+  stats.external_angular_impulse += w * (ang[0] + 4 * ang[1] + ang[2]);
+}
 
-  static int residual_cb(realtype t, N_Vector y, N_Vector ydot, N_Vector r, void* data) {
-    auto* self = static_cast<Impl*>(data);
-    try {
-      self->residual(t, view(y), view(ydot), view(r));
-      // Recoverable: IDA retries with a smaller step.
-      return view(r).allFinite() ? 0 : 1;
-    } catch (...) {
-      self->error = std::current_exception();
-      return -1;
-    }
-  }
-
-  static int jacobian_cb(realtype t, realtype cj, N_Vector y, N_Vector, N_Vector, SUNMatrix a,
-                         void* data, N_Vector, N_Vector, N_Vector) {
-    auto* self = static_cast<Impl*>(data);
-    try {
-      self->jacobian(t, cj, view(y));
-      self->klu->load(self->jac, a);
-      return 0;
-    } catch (...) {
-      self->error = std::current_exception();
-      return -1;
-    }
-  }
-
-  static int root_cb(realtype t, N_Vector y, N_Vector, realtype* g, void* data) {
-    auto* self = static_cast<Impl*>(data);
-    try {
-      self->roots(t, view(y), g);
-      return 0;
-    } catch (...) {
-      self->error = std::current_exception();
-      return -1;  // IDA returns IDA_RTFUNC_FAIL
-    }
-  }
-
-  static void error_cb(int, const char* module, const char* function, char* msg, void* data) {
-    auto* self = static_cast<Impl*>(data);
-    self->last_message = std::string(module) + "::" + function + ": " + msg;
-  }
-
-  long counter(int (*get)(void*, long*), const char* call) const {
-    long value = 0;
-    if (mem) check(get(mem.get(), &value), call);
-    return value;
-  }
-  long steps() const { return steps_before + counter(IDAGetNumSteps, "IDAGetNumSteps"); }
-  long jacs() const { return jacs_before + counter(IDAGetNumJacEvals, "IDAGetNumJacEvals"); }
-  long iters() const {
-    return iters_before + counter(IDAGetNumNonlinSolvIters, "IDAGetNumNonlinSolvIters");
-  }
-  // Before IDA's counters are reset (IDAReInit) or its memory freed.
-  void retire_counters() {
-    steps_before = steps();
-    jacs_before = jacs();
-    iters_before = iters();
-  }
-
-  void create_context() { ctx = sundials::make_context(); }
-
-  // (Re)allocates everything whose size is that of the DAE (2n + 2m) for the
-  // current active set; y0 = (q, v, lambda, mu) gives the Jacobian's pattern.
-  void allocate(double t, const Vec& y0) {
-    if (mem) retire_counters();
-    mem.reset();
-    klu.reset();
-    jmat.reset();
-    m = m_sys + static_cast<int>(active.size());
-    size = 2 * n + 2 * m;
-    for (VectorPtr* p : {&yy, &yp, &id, &yq, &ypq}) *p = sundials::make_vector(size, ctx.get());
-    // Differential: free q and v. Algebraic (no error test): lambda, mu and
-    // the prescribed q_i, v_i.
-    auto ids = view(id.get());
-    ids.setZero();
-    for (int i = 0; i < n; ++i)
-      if (free_dof(i)) ids[i] = ids[n + i] = 1.0;
-    view(yy.get()) = y0;
-    jacobian(t, 1.0, view(yy.get()));
-    jmat.reset(check_ptr(
-        SUNSparseMatrix(size, size, std::max<long>(1, jac.nonZeros()), CSC_MAT, ctx.get()),
-        "SUNSparseMatrix"));
-    klu = std::make_unique<KluSolver>(ctx.get(), KluSolver::Ordering::Colamd,
-                                      KluSolver::Pivoting::EverySetup);
-  }
-
-  // IDA's own first step makes ||h0 y'||_WRMS = 1/2, which at tight
-  // tolerances is ~1e-10: there the index-2 iteration matrix (condition
-  // ~1/h^2) leaves the multipliers to round-off and the corrector fails. The
-  // first BDF1 step's local error is ~h^2/2 q'' on q, so h0 = (max_i |a_i|
-  // w_i)^(-1/2) (w the error weights) passes the error test by construction
-  // at a far better-conditioned h. At most the requested interval.
-  double initial_step(const ConsistentStart& c, double interval) const {
-    double r = 0.0;
-    for (int i = 0; i < n; ++i)
-      if (free_dof(i)) r = std::max(r, std::abs(c.a[i]) / (set.rtol * std::abs(c.q[i]) + set.atol));
-    return r > 0 ? std::min(interval, 1.0 / std::sqrt(r)) : 0.0;  // 0: IDA's own
-  }
-
-  // Consistent values for the active set, settled in two phases.
-  //  1. Impact: the velocity projection at (q0, v0) is the impulse of the
-  //     entering candidates (perfectly inelastic); one whose impulse is
-  //     tensile (it was not approaching: the projection would pull it back)
-  //     is dropped, most tensile first, and the projection redone.
-  //  2. Forces: from the projected (q, v), an active candidate whose
-  //     multiplier is tensile is released, most tensile first; its normal
-  //     velocity is zero already, so the remaining projection changes
-  //     nothing and it separates by its acceleration.
-  // Returns the number of candidates released that were active before.
-  int settle(double t, const Vec& q0, const Vec& v0, std::vector<int> entering,
-             ConsistentStart& c) {
-    int releases = 0;
-    const int limit = 2 * n_cand + 4;
-    auto drop = [&](std::size_t k) {
-      const int cand = active[k];
-      if (std::find(entering.begin(), entering.end(), cand) == entering.end()) ++releases;
-      entering.erase(std::remove(entering.begin(), entering.end(), cand), entering.end());
-      active.erase(active.begin() + static_cast<std::ptrdiff_t>(k));
-    };
-    for (int it = 0;; ++it) {  // 1. impact
-      if (it > limit) throw std::runtime_error("IdaStepper: impact set did not settle");
-      refresh_terms();
-      c = consistent_start(s, t, q0, v0, extra);
-      std::size_t worst = active.size();
-      double worst_value = 0.0;
-      for (std::size_t k = 0; k < active.size(); ++k) {
-        const double kappa = c.impulse[m_sys + static_cast<Eigen::Index>(k)];
-        if (kappa > worst_value &&
-            std::find(entering.begin(), entering.end(), active[k]) != entering.end())
-          worst = k, worst_value = kappa;
-      }
-      if (worst == active.size()) break;
-      drop(worst);
-    }
-    const Vec q1 = c.q, v1 = c.v;
-    for (int it = 0;; ++it) {  // 2. forces
-      if (it > limit) throw std::runtime_error("IdaStepper: active set did not settle");
-      std::size_t worst = active.size();
-      double worst_value = 0.0;
-      for (std::size_t k = 0; k < active.size(); ++k) {
-        const double lambda = c.lambda[m_sys + static_cast<Eigen::Index>(k)];
-        if (lambda > worst_value) worst = k, worst_value = lambda;
-      }
-      if (worst == active.size()) return releases;
-      drop(worst);
-      refresh_terms();
-      c = consistent_start(s, t, q1, v1, extra);
-    }
-  }
-
-  // (Re)starts IDA at (t, q, v) with the current active set (`entering`: the
-  // candidates just added), projecting and settling it first; returns the
-  // releases made while settling.
-  int restart(double t, const Vec& q0, const Vec& v0, const std::vector<int>& entering,
-              double interval) {
-    ConsistentStart c;
-    const int releases = settle(t, q0, v0, entering, c);
-    const int m_new = m_sys + static_cast<int>(active.size());
-    // Candidates that are closed but not active get their root at -gap_tol.
-    for (int cand = 0; cand < n_cand; ++cand)
-      disarmed[static_cast<std::size_t>(cand)] =
-          !is_active(cand) && s.unilateral_gap(cand, c.q) <= gap_tol;
-    q_start = c.q;
-    Vec y0(2 * n + 2 * m_new), yd0(2 * n + 2 * m_new);
-    y0 << c.q, c.v, c.lambda, Vec::Zero(m_new);
-    yd0 << c.v, c.a, Vec::Zero(m_new), Vec::Zero(m_new);
-    const bool fresh = !mem || m_new != m;
-    if (fresh) allocate(t, y0);
-    view(yy.get()) = y0;
-    view(yp.get()) = yd0;
-    if (fresh) {
-      mem.reset(check_ptr(IDACreate(ctx.get()), "IDACreate"));
-      void* p = mem.get();
-      check_ida(IDASetErrHandlerFn(p, &Impl::error_cb, this), "IDASetErrHandlerFn");
-      check_ida(IDAInit(p, &Impl::residual_cb, t, yy.get(), yp.get()), "IDAInit");
-      check_ida(IDASStolerances(p, set.rtol, set.atol), "IDASStolerances");
-      check_ida(IDASetUserData(p, this), "IDASetUserData");
-      check_ida(IDASetId(p, id.get()), "IDASetId");
-      check_ida(IDASetSuppressAlg(p, SUNTRUE), "IDASetSuppressAlg");
-      check_ida(IDASetMaxOrd(p, set.max_order), "IDASetMaxOrd");
-      // One internal step per IDASolve call (IDA_ONE_STEP): the budget of
-      // step() is counted there.
-      check_ida(IDASetMaxNumSteps(p, set.max_steps), "IDASetMaxNumSteps");
-      check_ls(IDASetLinearSolver(p, klu->get(), jmat.get()), "IDASetLinearSolver");
-      check_ls(IDASetJacFn(p, &Impl::jacobian_cb), "IDASetJacFn");
-      if (n_cand > 0) {
-        check_ida(IDARootInit(p, n_cand, &Impl::root_cb), "IDARootInit");
-        std::vector<int> dir(static_cast<std::size_t>(n_cand), -1);
-        check_ida(IDASetRootDirection(p, dir.data()), "IDASetRootDirection");
-        check_ida(IDASetNoInactiveRootWarn(p), "IDASetNoInactiveRootWarn");
-      }
-    } else {
-      retire_counters();
-      check_ida(IDAReInit(mem.get(), t, yy.get(), yp.get()), "IDAReInit");
-    }
-    check_ida(IDASetInitStep(mem.get(), initial_step(c, interval)), "IDASetInitStep");
-    ++n_inits;
-    need_restart = false;
-    pending = false;
-    return releases;
-  }
-
-  bool continues(const State& st) const {
-    return !need_restart && st.t == t_out && same(st.q, q_out) && same(st.v, v_out) &&
-           st.active == active_out;
-  }
-
-  // --- quadratures of the loads over the step -----------------------------
-  // Simpson's rule on each piece [a, b] of IDA's internal steps (the dense
-  // output of the step that covers it at a, (a + b)/2, b): the work of the
-  // loads int f . v dt, and the impulse of the loads and supports int (f + R)
-  // dt with its moment int x x (f + R) dt (R = M v' + grad V + G^T lambda - f
-  // on the prescribed rows: the support reaction).
-  bool has_quadrature() const { return !s.loads().empty() || !s.prescribed().empty(); }
-
-  void quadrature_point(double t, double& power, Vec& impulse, Vec& angular) {
-    check_ida(IDAGetDky(mem.get(), t, 0, yq.get()), "IDAGetDky");
-    check_ida(IDAGetDky(mem.get(), t, 1, ypq.get()), "IDAGetDky");
-    const auto y = view(yq.get());
-    const Vec x = y.head(n), u = y.segment(n, n);
-    Vec density = Vec::Zero(n);
-    if (!s.loads().empty()) s.add_load_forces(x, t, density);
-    power = density.dot(u);
-    if (!s.prescribed().empty()) {
-      rq.resize(size);
-      residual(t, y, view(ypq.get()), Eigen::Map<Vec>(rq.data(), size), false);
-      for (const auto& p : s.prescribed()) density[p.dof] += rq[n + p.dof];
-    }
-    resultant_and_moment(s.dim(), x, density, impulse, angular);
-  }
-
-  void integrate_loads(double a, double b, StepStats& stats) {
-    if (!has_quadrature() || !(b > a)) return;
-    double p[3];
-    Vec imp[3], ang[3];
-    const double ts[3] = {a, 0.5 * (a + b), b};
-    for (int k = 0; k < 3; ++k) quadrature_point(ts[k], p[k], imp[k], ang[k]);
-    const double w = (b - a) / 6;
-    stats.external_work += w * (p[0] + 4 * p[1] + p[2]);
-    stats.external_impulse += w * (imp[0] + 4 * imp[1] + imp[2]);
-    stats.external_angular_impulse += w * (ang[0] + 4 * ang[1] + ang[2]);
-  }
-
-  // --- contact events -----------------------------------------------------
-  // The root returned at t_root: releases and impacts, then a constrained
-  // restart there. Returns the number of events.
-  int handle_root(double interval) {
-    const Vec q0 = y_root.head(n), v0 = y_root.segment(n, n);
-    std::vector<int> entering, released;
-    for (int cand = 0; cand < n_cand; ++cand)
-      if (roots_found[static_cast<std::size_t>(cand)] != 0) {
-        if (is_active(cand)) {
-          released.push_back(cand);
-        } else if (engaged(cand, q0)) {
-          entering.push_back(cand);
-        }
-      }
-    for (int cand : released) active.erase(std::find(active.begin(), active.end(), cand));
-    // Others closed at the same instant (within the root's time tolerance).
-    for (int cand = 0; cand < n_cand; ++cand)
-      if (!is_active(cand) && std::find(released.begin(), released.end(), cand) == released.end() &&
-          std::find(entering.begin(), entering.end(), cand) == entering.end() &&
-          engaged(cand, q0) && s.unilateral_gap(cand, q0) < 0.0)
+// --- contact events -------------------------------------------------------
+// The root returned at t_root: releases and impacts, then a constrained
+// restart there. Returns the number of events.
+int IdaStepper::Impl::handle_root(double interval) {
+  const Vec q0 = y_root.head(n), v0 = y_root.segment(n, n);
+  std::vector<int> entering, released;
+  for (int cand = 0; cand < n_cand; ++cand)
+    if (roots_found[static_cast<std::size_t>(cand)] != 0) {
+      if (is_active(cand)) {
+        released.push_back(cand);
+      } else if (engaged(cand, q0)) {
         entering.push_back(cand);
-    active.insert(active.end(), entering.begin(), entering.end());
-    const int releases = restart(t_root, q0, v0, entering, interval);
-    int kept = 0;
-    for (int cand : entering) kept += is_active(cand) ? 1 : 0;
-    return static_cast<int>(released.size()) + releases + kept;
-  }
-};
+      }
+    }
+  for (int cand : released) active.erase(std::find(active.begin(), active.end(), cand));
+  // Others closed at the same instant (within the root's time tolerance).
+  for (int cand = 0; cand < n_cand; ++cand)
+    if (!is_active(cand) && std::find(released.begin(), released.end(), cand) == released.end() &&
+        std::find(entering.begin(), entering.end(), cand) == entering.end() && engaged(cand, q0) &&
+        s.unilateral_gap(cand, q0) < 0.0)
+      entering.push_back(cand);
+  active.insert(active.end(), entering.begin(), entering.end());
+  const int releases = restart(t_root, q0, v0, entering, interval);
+  int kept = 0;
+  for (int cand : entering) kept += is_active(cand) ? 1 : 0;
+  return static_cast<int>(released.size()) + releases + kept;
+}
 
 IdaStepper::IdaStepper(const System& system, IdaSettings settings)
     : impl_(std::make_unique<Impl>(system, settings)) {
