@@ -56,8 +56,11 @@ struct StudyOptions {
   std::optional<std::string> dts;   // "0.04,0.02"; default: the scene's dt x 4, 2, 1, 1/2
   std::optional<std::string> tols;  // ida's rtol = atol; default: 1e-4, 1e-6, 1e-8
   std::string t_end;
-  std::string reference_dt;  // scheme em; default: the smallest of dts / 8
-  std::string out_dir;       // empty: out/<scene name>-study
+  std::string reference_dt;             // scheme em; default: the smallest of dts / 8
+  std::optional<std::string> times;     // "6,6.5,8": positions compared there; default: chosen
+  std::optional<std::string> measures;  // "positions,window,momenta,energy" (the default: all)
+  bool reference_check = true;          // a second reference at twice the reference's step
+  std::string out_dir;                  // empty: out/<scene name>-study
   std::vector<std::string> overrides;
   bool quiet = false;
 };
@@ -70,9 +73,9 @@ int command_run(const RunOptions& options, std::ostream& out, std::ostream& err)
 /// unknown scheme name) is 2 before anything runs.
 int command_compare(const CompareOptions& options, std::ostream& out, std::ostream& err);
 
-/// Runs the scene with scheme em at the reference step, then with each
-/// scheme at each step size (ida at each tolerance), and writes DIR/study.csv,
-/// study.json (rewritten after every run) and study.html (verify/study.hpp).
+/// Runs the scene with scheme em at the reference step (and at twice it,
+/// the reference check), then with each scheme at each step size (ida at each tolerance), and
+/// writes DIR/study.csv, study.json (rewritten after every run) and study.html (verify/study.hpp).
 /// Every run is checked (scene and stepper) before the first one starts: bad
 /// input is 2 with nothing written. A run that fails is recorded and the
 /// others still run; exit code: the worst of the runs (3 for a failure; the

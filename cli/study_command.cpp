@@ -14,6 +14,7 @@
 #include "cli/progress.hpp"
 #include "run/describe.hpp"
 #include "verify/study.hpp"
+#include "verify/study_measures.hpp"
 
 namespace emdae {
 
@@ -61,11 +62,40 @@ std::vector<double> parse_values(const std::string& option, const std::string& t
   return values;
 }
 
+// Hands every state of a run to the sampler of positions and to the
+// locator of the contact's start, and everything to the console's observer.
+class StudyObserver final : public RunObserver {
+ public:
+  StudyObserver(RunObserver& console, PositionSampler& sampler, ContactStartLocator& contact)
+      : console_(console), sampler_(sampler), contact_(contact) {}
+  void initial(const State& state) override {
+    sampler_.observe(state);
+    contact_.observe(state);
+    console_.initial(state);
+  }
+  void started(double t_start, double t_end) override { console_.started(t_start, t_end); }
+  void sampled(const State& state, const Sample& sample, const Recorder& recorder) override {
+    sampler_.observe(state);
+    contact_.observe(state);
+    console_.sampled(state, sample, recorder);
+  }
+  bool interrupted() override { return console_.interrupted(); }
+  void warned(const std::string& message) override { console_.warned(message); }
+  void finished() override { console_.finished(); }
+
+ private:
+  RunObserver& console_;
+  PositionSampler& sampler_;
+  ContactStartLocator& contact_;
+};
+
 // One run of a study: the scene with `overrides`, run as `emdae run` runs
-// it but without output of its own; its figures and its positions at t_end
-// go to `run`.
+// it but without output of its own; its figures, its positions at t_end and
+// what the measures need (positions at `times`, the contact window, the
+// groups' motion at t_end) go to `run`.
 int study_run(const std::string& scene_path, const std::vector<SceneOverride>& overrides,
-              const std::string& label, bool quiet, std::ostream& err, StudyRun& run) {
+              const std::string& label, bool quiet, const std::vector<double>& times,
+              const std::vector<NodeGroup>& groups, std::ostream& err, StudyRun& run) {
   std::unique_ptr<Scene> scene;
   const std::string problem = prepare_run(scene_path, overrides, scene);
   if (!problem.empty()) {
@@ -77,14 +107,108 @@ int study_run(const std::string& scene_path, const std::vector<SceneOverride>& o
   RunSettings& settings = scene->settings;
   // The scene's [tolerances] judge runs at its own step: not checked here.
   settings.tolerances = {};
-  ConsoleObserver observer(err, quiet, label + " ");
+  ConsoleObserver console(err, quiet, label + " ");
+  PositionSampler sampler(times);
+  ContactStartLocator contact(scene->model->system());
+  StudyObserver observer(console, sampler, contact);
   const RunResult result = emdae::run(*scene->model, settings, &observer);
   run.take(result.summary);
   const double t_end = settings.time.t_end;
   const int code = exit_code(result);
-  if (code == kExitOk && std::abs(result.state.t - t_end) <= 1e-9 * std::max(1.0, std::abs(t_end)))
+  if (code == kExitOk &&
+      std::abs(result.state.t - t_end) <= 1e-9 * std::max(1.0, std::abs(t_end))) {
     run.q_end = result.state.q;
+    RunMeasures& m = run.measured;
+    m.times = sampler.times();
+    m.positions = sampler.positions();
+    if (result.summary.contact) {
+      // The start located within its step; the end as the summary has it.
+      m.contact_first = contact.first() ? *contact.first() : result.summary.contact->first;
+      m.contact_last = result.summary.contact->last;
+    }
+    measure_final_state(scene->model->system(), groups, result.state, m);
+  }
   return code;
+}
+
+// The groups whose momenta and energies are measured: each FE body, and the
+// free particles together.
+std::vector<NodeGroup> node_groups(const Model& model) {
+  std::vector<NodeGroup> out;
+  for (const auto& b : model.bodies()) {
+    NodeGroup g{b.name, {}};
+    for (int a = 0; a < b.info.n_nodes; ++a) g.nodes.push_back(b.node(a));
+    out.push_back(g);
+  }
+  NodeGroup particles{"particles", {}};
+  for (const auto& p : model.particles())
+    if (!p.fixed) particles.nodes.push_back(p.node);
+  if (!particles.nodes.empty()) out.push_back(particles);
+  return out;
+}
+
+// The families of --measures, each known and given once.
+std::vector<std::string> parse_measures(const std::string& text, std::string& problem) {
+  const auto& known = measure_families();
+  std::vector<std::string> out;
+  for (const auto& item : split_list(text)) {
+    if (std::find(known.begin(), known.end(), item) == known.end()) {
+      std::string names;
+      for (const auto& k : known) names += (names.empty() ? "" : ", ") + k;
+      problem = fmt::format("--measures: unknown measure '{}' (known: {})", item, names);
+      return {};
+    }
+    if (std::find(out.begin(), out.end(), item) != out.end()) {
+      problem = fmt::format("--measures: '{}' is given twice", item);
+      return {};
+    }
+    out.push_back(item);
+  }
+  if (out.empty()) problem = "--measures: no measure given";
+  return out;
+}
+
+// The times of --times: numbers, each once, in (0, t_end]; sorted.
+std::vector<double> parse_times(const std::string& text, double t_end, std::string& problem) {
+  std::vector<double> out;
+  for (const auto& item : split_list(text)) {
+    const auto t = parse_number(item);
+    if (!t) {
+      problem = fmt::format("--times: '{}' is not a number", item);
+      return {};
+    }
+    if (!(*t > 0 && *t <= t_end * (1 + 1e-12))) {
+      problem = fmt::format(
+          "--times: {} is outside the run, (0, {:g}] (t_end: --t-end or the "
+          "scene's time.t_end)",
+          item, t_end);
+      return {};
+    }
+    for (double x : out)
+      if (std::abs(x - *t) <= 1e-9 * std::max(1.0, std::abs(*t))) {
+        problem = fmt::format("--times: {} is given twice", item);
+        return {};
+      }
+    out.push_back(std::min(*t, t_end));
+  }
+  if (out.empty()) problem = "--times: no time given";
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+// The reference's positions at `chosen`, taken from those it kept at `times`.
+void keep_positions(RunMeasures& m, const std::vector<ChosenTime>& chosen) {
+  std::vector<double> times;
+  std::vector<Vec> positions;
+  for (const auto& c : chosen) {
+    times.push_back(c.time);
+    positions.emplace_back();
+    for (std::size_t i = 0; i < m.times.size(); ++i)
+      if (std::abs(m.times[i] - c.time) <= 1e-9 * std::max(1.0, std::abs(c.time)))
+        positions.back() = m.positions[i];
+  }
+  m.times = std::move(times);
+  m.positions = std::move(positions);
 }
 
 std::string list_text(const std::vector<double>& values) {
@@ -140,6 +264,27 @@ int command_study(const StudyOptions& options, std::ostream& out, std::ostream& 
     return refuse(fmt::format(
         "--reference-dt: must be smaller than the smallest step of --dts ({:g}), received {}",
         dts.back(), reference_text));
+  const bool contact = !scene->model->contacts().empty();
+  std::vector<std::string> families;
+  if (options.measures) {
+    families = parse_measures(*options.measures, problem);
+    if (!problem.empty()) return refuse(problem);
+    if (!contact && std::find(families.begin(), families.end(), "window") != families.end())
+      return refuse(
+          fmt::format("--measures: 'window' needs contact, and scene '{}' has no [[contacts]]",
+                      scene->settings.name));
+  } else {
+    for (const auto& f : measure_families())
+      if (f != "window" || contact) families.push_back(f);
+  }
+  const double t_end = scene->settings.time.t_end;
+  std::optional<std::vector<double>> given_times;
+  if (options.times) {
+    given_times = parse_times(*options.times, t_end, problem);
+    if (!problem.empty()) return refuse(problem);
+    if (std::find(families.begin(), families.end(), "positions") == families.end())
+      return refuse("--times: the positions are not among --measures");
+  }
 
   // The plan: the reference first, then scheme by scheme from the largest
   // step (loosest tolerance) down. Each run's values are scene overrides
@@ -161,6 +306,20 @@ int command_study(const StudyOptions& options, std::ostream& out, std::ostream& 
     p.overrides.push_back({"time.dt=" + value(reference_dt), "--reference-dt " + reference_text});
     plan.push_back(std::move(p));
   }
+  if (options.reference_check) {
+    // The check: em at twice the reference's step.
+    const double h = 2 * reference_dt;
+    const std::string origin =
+        fmt::format("the reference check (em at dt = 2 x --reference-dt {})", reference_text);
+    Planned p{{}, base, fmt::format("reference check em dt {:g}", h)};
+    p.run.scheme = "em";
+    p.run.dt = h;
+    p.run.reference_check = true;
+    p.overrides.push_back({"scheme.name=em", origin});
+    p.overrides.push_back({"time.dt=" + value(h), origin});
+    plan.push_back(std::move(p));
+  }
+  const std::size_t first_run = options.reference_check ? 2 : 1;
   for (const auto& scheme : schemes) {
     for (double x : scheme == "ida" ? tols : dts) {
       const bool ida = scheme == "ida";
@@ -208,12 +367,22 @@ int command_study(const StudyOptions& options, std::ostream& out, std::ostream& 
   study.dimension = scene->model->dim();
   study.t_end = scene->settings.time.t_end;
   study.size = bounding_box_diagonal(scene->system().initial_positions(), scene->model->dim());
-  study.contact = !scene->model->contacts().empty();
+  study.contact = contact;
   study.schemes = schemes;
   if (has_steps) study.dts = dts;
   if (has_ida) study.tols = tols;
   study.reference = plan.front().run;
-  for (std::size_t i = 1; i < plan.size(); ++i) study.runs.push_back(plan[i].run);
+  study.check_reference = options.reference_check;
+  if (options.reference_check) study.reference_check = plan[1].run;
+  for (std::size_t i = first_run; i < plan.size(); ++i) study.runs.push_back(plan[i].run);
+  study.families = families;
+  study.groups = node_groups(*scene->model);
+  // Until the reference has run, the times positions may be compared at:
+  // the given ones, or a grid of the largest step the default ones are
+  // chosen from (where every run with a step dividing it lands exactly).
+  const double largest_step = has_steps ? dts.front() : scene_dt;
+  const std::vector<double> grid = capture_grid(largest_step, t_end);
+  std::vector<double> capture = given_times ? *given_times : grid;
 
   ReportInfo info = report_info(*scene->model, scene->settings);
   info.scheme.clear();
@@ -237,6 +406,13 @@ int command_study(const StudyOptions& options, std::ostream& out, std::ostream& 
     varied.emplace_back("galpha spectral radius at infinity",
                         fmt::format("{}", scene->settings.schemes.galpha.rho_inf));
   varied.emplace_back("reference", fmt::format("scheme em, dt = {:g}", reference_dt));
+  varied.emplace_back("reference check", options.reference_check
+                                             ? fmt::format("scheme em, dt = {:g}", 2 * reference_dt)
+                                             : std::string("none (--no-reference-check)"));
+  std::string family_list;
+  for (const auto& f : families) family_list += (family_list.empty() ? "" : ", ") + f;
+  varied.emplace_back("measures", family_list);
+  if (given_times) varied.emplace_back("positions compared at (--times)", list_text(*given_times));
   info.settings.insert(info.settings.begin(), varied.begin(), varied.end());
   scene.reset();  // each run loads its own
 
@@ -246,9 +422,27 @@ int command_study(const StudyOptions& options, std::ostream& out, std::ostream& 
   bool interrupted = false;
   try {
     for (std::size_t i = 0; i < plan.size(); ++i) {
-      StudyRun& run = i == 0 ? study.reference : study.runs[i - 1];
-      const int code =
-          study_run(options.scene_path, plan[i].overrides, plan[i].label, options.quiet, err, run);
+      StudyRun& run = i == 0          ? study.reference
+                      : i < first_run ? study.reference_check
+                                      : study.runs[i - first_run];
+      const int code = study_run(options.scene_path, plan[i].overrides, plan[i].label,
+                                 options.quiet, capture, study.groups, err, run);
+      if (i == 0 && run.ok()) {
+        // The times and the measures, from what the reference gave.
+        RunMeasures& ref = run.measured;
+        if (given_times) {
+          for (double t : *given_times)
+            study.times.push_back(
+                {t, std::abs(t - t_end) <= 1e-9 * std::max(1.0, t_end) ? "t_end" : "given"});
+        } else {
+          study.times =
+              default_times(grid, t_end, ref.contact_first, ref.contact_last, largest_step);
+        }
+        keep_positions(ref, study.times);
+        capture = ref.times;
+        study.measures = define_measures(families, study.times, study.groups, ref, study.size,
+                                         t_end, contact, study.dimension);
+      }
       if (!options.quiet)
         fmt::print(err, "emdae: {}: {} ({} steps, {:.3f} s)\n", plan[i].label, run.status,
                    run.steps, run.cpu_seconds);

@@ -292,6 +292,7 @@ RunResult run(Model& model, const RunSettings& settings, RunObserver* watcher) {
       result.end = RunResult::End::Failed;
     if (info.statics) info.cpu_seconds = info.statics->cpu_seconds;
   } else {
+    observer.initial(state);
     observer.started(state.t, settings.time.t_end);
     // A failed static solve leaves nothing to integrate from.
     if (result.finished()) {

@@ -70,6 +70,9 @@ struct RunSettings {
 class RunObserver {
  public:
   virtual ~RunObserver() = default;
+  /// The state the time loop starts from (after [statics]), just before
+  /// started(); not called for a static analysis.
+  virtual void initial(const State& /*state*/) {}
   /// The time loop starts at t_start (after [statics]) and runs to t_end.
   virtual void started(double /*t_start*/, double /*t_end*/) {}
   /// After every accepted step (static analysis: load increment).

@@ -113,14 +113,18 @@ TEST(Study, EnergyMomentumAndMidpointAreSecondOrder) {
   EXPECT_LT(runs_of(s, "em").front()["energy_rel_error_max"].get<double>(), 1e-8);
   EXPECT_GT(runs_of(s, "midpoint").front()["energy_rel_error_max"].get<double>(), 1e-5);
 
-  // study.csv: a header, a row per run, the reference last.
+  // study.csv: a header, a row per run, a row of orders per scheme, the
+  // reference check (em at twice the reference's step), the reference last.
   const auto lines = read_lines(out / "study.csv");
-  ASSERT_EQ(lines.size(), 1u + 8u + 1u);
+  ASSERT_EQ(lines.size(), 1u + 8u + 2u + 1u + 1u);
   EXPECT_EQ(
       lines[0].rfind("role,scheme,dt,tol,steps,iterations,cpu_seconds,error,error_rel,order,", 0),
       0u)
       << lines[0];
   EXPECT_EQ(lines[1].rfind("run,em,0.005,,200,", 0), 0u) << lines[1];
+  EXPECT_EQ(lines[9].rfind("order,em,", 0), 0u) << lines[9];
+  EXPECT_EQ(lines[10].rfind("order,midpoint,", 0), 0u) << lines[10];
+  EXPECT_EQ(lines[11].rfind("reference_check,em,0.00015625,", 0), 0u) << lines[11];
   EXPECT_EQ(lines.back().rfind("reference,em,", 0), 0u) << lines.back();
 
   const std::string html = read_text(out / "study.html");
@@ -128,10 +132,10 @@ TEST(Study, EnergyMomentumAndMidpointAreSecondOrder) {
   EXPECT_NE(html.find("Work-precision"), std::string::npos);
   EXPECT_EQ(html.find("IDA: error"), std::string::npos);  // no ida, no figure for it
   if (have_gnuplot()) {
-    // Error against dt and against CPU time, drawn.
+    // Error against dt and against CPU time, and each scheme's measures, drawn.
     int svgs = 0;
     for (auto p = html.find("<svg"); p != std::string::npos; p = html.find("<svg", p + 1)) ++svgs;
-    EXPECT_EQ(svgs, 2) << html;
+    EXPECT_EQ(svgs, 2 + 2) << html;
   }
 }
 
@@ -206,7 +210,7 @@ TEST(Study, FailedRunIsRecordedAndTheOthersStillRun) {
   EXPECT_TRUE(fs::exists(out / "study.html"));
   // The message is quoted in the CSV (it holds commas).
   const auto lines = read_lines(out / "study.csv");
-  ASSERT_EQ(lines.size(), 1u + 4u + 1u);
+  ASSERT_EQ(lines.size(), 1u + 4u + 2u + 1u + 1u);  // runs, orders, check, reference
   EXPECT_NE(lines[2].find(",\"IDA failed at t = 0"), std::string::npos) << lines[2];
 }
 
@@ -221,7 +225,24 @@ TEST(Study, ContactSceneSaysOrdersAreNotExpected) {
   EXPECT_NE(r.output.find("not expected to be 2"), std::string::npos) << r.output;
   const nlohmann::json s = read_json(out / "study.json");
   EXPECT_EQ(s["contact"], true);
-  EXPECT_TRUE(s["reference_error_estimate"].is_null());  // no order 2 through impacts
+  // The reference's error is the check's distance from it, contact or not.
+  ASSERT_TRUE(s["reference_error_estimate"].is_number()) << s;
+  EXPECT_EQ(s["reference_error_estimate"], s["reference_check"]["error"]);
+  // The reference never touched: no contact window to compare.
+  for (const auto& m : s["measures"]) EXPECT_NE(m["family"], "window") << m;
+  EXPECT_NE(r.output.find("the reference run has no contact"), std::string::npos) << r.output;
+
+  // Without the check, no estimate through impacts (em is not of order 2 there).
+  const fs::path unchecked = dir.path() / "unchecked";
+  const Result u = emdae("study " + quote(example("ring_impact")) +
+                         " --schemes em --dts 0.02,0.01 --t-end 0.04 --no-reference-check -q"
+                         " --out " +
+                         quote(unchecked.string()));
+  ASSERT_EQ(u.code, 0) << u.output;
+  const nlohmann::json v = read_json(unchecked / "study.json");
+  EXPECT_TRUE(v["reference_error_estimate"].is_null());
+  EXPECT_TRUE(v["reference_check"].is_null());
+  EXPECT_EQ(read_lines(unchecked / "study.csv").size(), 1u + 2u + 1u + 1u);  // no check row
 }
 
 // --- bad input: exit 2, a message naming what is wrong, nothing written -----------------
@@ -280,8 +301,39 @@ INSTANTIATE_TEST_SUITE_P(
         BadStudy{"bad_set", "--schemes em --set time.dtt=1", "did you mean 'dt'?"},
         BadStudy{"bad_t_end", "--schemes em --t-end 0.001", "--t-end 0.001: key 'time.t_end'"},
         BadStudy{"bad_scene", "{bad}--schemes em", "{bad}:2:"},
-        BadStudy{"missing_scene_option", "", "--schemes is required"}),
+        BadStudy{"missing_scene_option", "", "--schemes is required"},
+        // The double pendulum runs to t_end = 10 unless --t-end says otherwise.
+        BadStudy{"time_after_t_end", "--schemes em --times 5,10.5",
+                 "--times: 10.5 is outside the run, (0, 10]"},
+        BadStudy{"time_after_given_t_end", "--schemes em --t-end 1 --times 2",
+                 "--times: 2 is outside the run, (0, 1]"},
+        BadStudy{"time_zero", "--schemes em --times 0", "--times: 0 is outside the run"},
+        BadStudy{"time_negative", "--schemes em --times -1", "--times: -1 is outside the run"},
+        BadStudy{"time_not_a_number", "--schemes em --times 1,soon",
+                 "--times: 'soon' is not a number"},
+        BadStudy{"time_twice", "--schemes em --times 1,1.0", "--times: 1.0 is given twice"},
+        BadStudy{"time_not_finite", "--schemes em --times inf", "--times: 'inf' is not a number"},
+        BadStudy{"empty_times", "--schemes em --times ''", "--times: no time given"},
+        BadStudy{"times_without_positions", "--schemes em --times 1 --measures energy",
+                 "--times: the positions are not among --measures"},
+        BadStudy{"unknown_measure", "--schemes em --measures positions,speed",
+                 "--measures: unknown measure 'speed' (known: positions, window, momenta, "
+                 "energy)"},
+        BadStudy{"measure_twice", "--schemes em --measures energy,energy",
+                 "--measures: 'energy' is given twice"},
+        BadStudy{"empty_measures", "--schemes em --measures ,", "--measures: no measure given"},
+        BadStudy{"window_without_contact", "--schemes em --measures window",
+                 "--measures: 'window' needs contact, and scene 'double_pendulum' has no "
+                 "[[contacts]]"}),
     [](const auto& param_info) { return param_info.param.name; });
+
+TEST(Study, HelpNamesTheMeasuresAndTheirOptions) {
+  const Result r = emdae("study --help");
+  EXPECT_EQ(r.code, 0) << r.output;
+  for (const char* s : {"--times", "--measures", "--no-reference-check", "positions", "window",
+                        "momenta", "energy", "after separation", "not resolved by the reference"})
+    EXPECT_NE(r.output.find(s), std::string::npos) << s << " in\n" << r.output;
+}
 
 TEST(Study, UnreadableSceneIsBadInput) {
   TempDir dir;

@@ -10,6 +10,7 @@
 #include <ostream>
 
 #include "verify/page.hpp"
+#include "verify/study_detail.hpp"
 
 namespace emdae {
 
@@ -19,9 +20,7 @@ namespace fs = std::filesystem;
 using Json = nlohmann::ordered_json;
 using namespace report_detail;
 
-bool positive(double x) {
-  return std::isfinite(x) && x > 0;
-}
+using namespace study_detail;
 
 Json number_or_null(double x) {
   return std::isfinite(x) ? Json(x) : Json(nullptr);
@@ -31,9 +30,10 @@ Json number_or_null(const std::optional<double>& x) {
   return x ? number_or_null(*x) : Json(nullptr);
 }
 
-// "dt 0.01" or "tol 1e-06": what a run is varied by.
-std::string axis_label(const StudyRun& r) {
-  return r.tol ? fmt::format("tol {:g}", *r.tol) : fmt::format("dt {:g}", r.dt);
+Json vec_json(const Vec& v) {
+  Json out = Json::array();
+  for (Eigen::Index i = 0; i < v.size(); ++i) out.push_back(number_or_null(v[i]));
+  return out;
 }
 
 // A CSV cell: empty for a missing number.
@@ -53,17 +53,38 @@ std::string csv_text(const std::string& s) {
   return out + "\"";
 }
 
-std::string csv_row(const StudyRun& r) {
-  return fmt::format(
-      "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}\n", r.reference ? "reference" : "run", r.scheme,
-      cell(r.dt, "{}"), cell(r.tol, "{}"), r.ran ? std::to_string(r.steps) : "",
+std::string csv_row(const Study& study, const StudyRun& r) {
+  std::string out = fmt::format(
+      "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
+      r.reference         ? "reference"
+      : r.reference_check ? "reference_check"
+                          : "run",
+      r.scheme, cell(r.dt, "{}"), cell(r.tol, "{}"), r.ran ? std::to_string(r.steps) : "",
       r.ran ? std::to_string(r.iterations) : "", r.ran ? cell(r.cpu_seconds, "{:.6f}") : "",
       cell(r.error), cell(r.error_rel), cell(r.order, "{:.4f}"), cell(r.energy_rel_error_max),
       cell(r.linear_momentum_error_max), cell(r.angular_momentum_rel_error_max),
       cell(r.constraint_residual_max), csv_text(r.status));
+  for (std::size_t k = 0; k < study.measures.size(); ++k)
+    out += "," + (k < r.measure_errors.size() ? cell(r.measure_errors[k]) : std::string());
+  return out + "\n";
 }
 
-Json run_json(const StudyRun& r) {
+// A row `order` of a scheme: the fitted orders of the error and of every measure.
+std::string csv_order_row(const Study& study, std::size_t scheme,
+                          const std::vector<Study::MeasureSummary>& summaries) {
+  std::vector<double> h, e;
+  for (const auto& r : study.runs)
+    if (r.scheme == study.schemes[scheme] && r.ok()) {
+      h.push_back(r.axis());
+      e.push_back(r.error);
+    }
+  std::string out = fmt::format("order,{},,,,,,,,{},,,,,", study.schemes[scheme],
+                                cell(fitted_order(h, e, 1e-10 * study.size), "{:.4f}"));
+  for (const auto& m : summaries) out += "," + cell(m.orders[scheme], "{:.4f}");
+  return out + "\n";
+}
+
+Json run_json(const Study& study, const StudyRun& r) {
   Json j;
   j["scheme"] = r.scheme;
   j["dt"] = r.dt;
@@ -79,161 +100,25 @@ Json run_json(const StudyRun& r) {
   j["linear_momentum_error_max"] = number_or_null(r.linear_momentum_error_max);
   j["angular_momentum_rel_error_max"] = number_or_null(r.angular_momentum_rel_error_max);
   j["constraint_residual_max"] = number_or_null(r.constraint_residual_max);
+  if (study.contact) {
+    const RunMeasures& m = r.measured;
+    j["contact_window"] = m.complete && m.contact_first
+                              ? Json::array({*m.contact_first, number_or_null(m.contact_last)})
+                              : Json(nullptr);
+    j["active_contacts_at_end"] = m.complete ? Json(m.active_at_end) : Json(nullptr);
+  }
+  // Each measure's error, and its value (but the positions: a node vector).
+  Json errors = Json::object(), values = Json::object();
+  for (std::size_t k = 0; k < study.measures.size(); ++k) {
+    const MeasureSpec& spec = study.measures[k];
+    errors[spec.id] =
+        number_or_null(k < r.measure_errors.size() ? r.measure_errors[k] : std::nan(""));
+    if (spec.kind != MeasureKind::Positions)
+      values[spec.id] = vec_json(measure_value(spec, r.measured));
+  }
+  j["measures"] = errors;
+  j["values"] = values;
   return j;
-}
-
-std::string short_sci(double x) {
-  return std::isfinite(x) ? fmt::format("{:.3e}", x) : "-";
-}
-
-std::string short_sci(const std::optional<double>& x) {
-  return x ? short_sci(*x) : "-";
-}
-
-std::string short_order(const std::optional<double>& x) {
-  return x ? fmt::format("{:.2f}", *x) : "-";
-}
-
-// --- the page ------------------------------------------------------------------------------
-
-std::string table_html(const Study& study) {
-  std::string out =
-      "<div class=\"wide\"><table class=\"compare\">\n"
-      "<tr><th>scheme</th><th>dt / tol</th><th>status</th><th>steps</th><th>iterations</th>"
-      "<th>CPU s</th><th>error at t_end</th><th>relative error</th><th>observed order</th>"
-      "<th>energy error</th><th>lin. momentum error</th><th>ang. momentum error</th>"
-      "<th>max |&Phi;|</th></tr>\n";
-  const auto num = [](const std::string& s) { return "<td class=\"num\">" + s + "</td>"; };
-  std::vector<const StudyRun*> rows;
-  for (const auto& r : study.runs) rows.push_back(&r);
-  rows.push_back(&study.reference);
-  for (const StudyRun* r : rows) {
-    out += "<tr><td><code>" + html_escape(r->scheme) + "</code>" +
-           (r->reference ? " (reference)" : "") + "</td>" + num(html_escape(axis_label(*r)));
-    if (!r->ran) {
-      out += "<td colspan=\"11\" class=\"note\">" + html_escape(r->status) + "</td></tr>\n";
-      continue;
-    }
-    out += "<td>" + status_badge(r->status) + "</td>" + num(std::to_string(r->steps)) +
-           num(std::to_string(r->iterations)) + num(fmt::format("{:.3f}", r->cpu_seconds)) +
-           num(r->reference ? "&mdash;" : short_sci(r->error)) +
-           num(r->reference ? "&mdash;" : short_sci(r->error_rel)) + num(short_order(r->order)) +
-           num(short_sci(r->energy_rel_error_max)) + num(short_sci(r->linear_momentum_error_max)) +
-           num(short_sci(r->angular_momentum_rel_error_max)) +
-           num(short_sci(r->constraint_residual_max)) + "</tr>\n";
-  }
-  return out + "</table></div>\n";
-}
-
-// A dashed guide of the given slope through the first drawn point, over
-// the range of the figure's x values, a factor 3 below it so as not to hide it.
-void add_slope_guide(Figure& fig, double slope, const std::string& label) {
-  double x_lo = std::numeric_limits<double>::infinity(), x_hi = 0, x0 = 0, y0 = 0;
-  for (const auto& s : fig.series)
-    for (std::size_t i = 0; i < s.t.size(); ++i) {
-      if (!positive(s.t[i]) || !positive(s.y[i])) continue;
-      x_lo = std::min(x_lo, s.t[i]);
-      x_hi = std::max(x_hi, s.t[i]);
-      if (x0 == 0) {
-        x0 = s.t[i];
-        y0 = s.y[i];
-      }
-    }
-  if (!(x_hi > x_lo)) return;
-  Series guide{label, {}, {}, true};
-  for (double x : {x_lo, x_hi}) {
-    guide.t.push_back(x);
-    guide.y.push_back(y0 / 3 * std::pow(x / x0, slope));
-  }
-  fig.series.push_back(guide);
-}
-
-std::vector<Figure> study_figures(const Study& study) {
-  Figure by_dt{"error-dt",
-               "Error at t_end against the step size",
-               "max |q - q_ref| at t_end",
-               Axis::Log,
-               {},
-               std::nullopt,
-               "",
-               "",
-               "dt",
-               true,
-               true};
-  Figure by_tol{"error-tol",
-                "IDA: error at t_end against the tolerance",
-                "max |q - q_ref| at t_end",
-                Axis::Log,
-                {},
-                std::nullopt,
-                "",
-                "",
-                "rtol = atol",
-                true,
-                true};
-  Figure by_cpu{"work-precision",
-                "Work-precision: error at t_end against CPU time",
-                "max |q - q_ref| at t_end",
-                Axis::Log,
-                {},
-                std::nullopt,
-                "",
-                "",
-                "CPU seconds",
-                true,
-                true};
-  bool any_ida = false, any_dt = false;
-  for (const auto& scheme : study.schemes) {
-    Series against_axis{scheme, {}, {}}, against_cpu{scheme, {}, {}};
-    for (const auto& r : study.runs) {
-      if (r.scheme != scheme || !r.ok() || !std::isfinite(r.error)) continue;
-      against_axis.t.push_back(r.axis());
-      against_axis.y.push_back(r.error);
-      against_cpu.t.push_back(r.cpu_seconds);
-      against_cpu.y.push_back(r.error);
-    }
-    if (against_axis.t.empty()) continue;
-    (scheme == "ida" ? by_tol : by_dt).series.push_back(against_axis);
-    (scheme == "ida" ? any_ida : any_dt) = true;
-    by_cpu.series.push_back(against_cpu);
-  }
-  const std::string floor = floor_caption(true);
-  const std::string failed = " Failed runs are not drawn.";
-  by_dt.caption =
-      "max over the nodes of |q &minus; q<sub>ref</sub>| at t_end, one line per scheme; the dashed "
-      "line has slope 2 (second order)." +
-      floor + failed;
-  by_tol.caption =
-      "IDA chooses its own steps; its error against rtol = atol. The dashed line has slope 1 "
-      "(error proportional to the tolerance)." +
-      floor + failed;
-  by_cpu.caption =
-      "Each point a run: its error at t_end against the process CPU time of its integration. "
-      "Lower left is better." +
-      floor + failed;
-  std::vector<Figure> figs;
-  const bool has_dt_scheme =
-      std::any_of(study.schemes.begin(), study.schemes.end(), [](auto& s) { return s != "ida"; });
-  const bool has_ida =
-      std::find(study.schemes.begin(), study.schemes.end(), "ida") != study.schemes.end();
-  const std::string none = "no run finished with an error to draw";
-  if (has_dt_scheme) {
-    if (any_dt)
-      add_slope_guide(by_dt, 2.0, "slope 2");
-    else
-      by_dt.note = none;
-    figs.push_back(by_dt);
-  }
-  if (has_ida) {
-    if (any_ida)
-      add_slope_guide(by_tol, 1.0, "slope 1");
-    else
-      by_tol.note = none;
-    figs.push_back(by_tol);
-  }
-  if (by_cpu.series.empty()) by_cpu.note = none;
-  figs.push_back(by_cpu);
-  return figs;
 }
 
 }  // namespace
@@ -262,14 +147,26 @@ std::vector<std::string> Study::notes() const {
                              "box of the initial positions",
                              size)
                : std::string("relative error: none (the initial positions span no box)"));
-  if (const auto e = reference_error_estimate())
-    out.push_back(fmt::format(
-        "the reference's own error, estimated from em's finest run as if em were of order 2, is "
-        "about {:.1e}: errors near it are not resolved (a smaller --reference-dt resolves them)",
-        *e));
+  if (const auto e = reference_error_estimate()) {
+    if (check_reference)
+      out.push_back(fmt::format(
+          "the reference's own error at t_end, estimated as its distance from the check (em at "
+          "dt = {:g}), is at most about {:.1e}: errors near it are not resolved (a smaller "
+          "--reference-dt resolves them)",
+          reference_check.dt, *e));
+    else
+      out.push_back(fmt::format(
+          "the reference's own error, estimated from em's finest run as if em were of order 2, "
+          "is about {:.1e}: errors near it are not resolved (a smaller --reference-dt resolves "
+          "them)",
+          *e));
+  }
   if (reference.ran && !reference.ok())
     out.push_back("the reference run did not finish (" + reference.status +
                   "): no errors and no orders");
+  if (check_reference && reference_check.ran && !reference_check.ok())
+    out.push_back("the reference check did not finish (" + reference_check.status +
+                  "): the reference is not checked");
   if (contact)
     out.push_back(
         "the scene has contact: through impacts the observed orders are not expected to be 2 "
@@ -278,12 +175,65 @@ std::vector<std::string> Study::notes() const {
     out.push_back(
         "ida: rtol = atol = tol, output every scene dt; its order is the slope of the error "
         "against tol (1: proportional to it)");
+  if (!reference.ok()) return out;
+  // The measures.
+  if (!measures.empty())
+    out.push_back(
+        "measures: each run's error against the reference; the order of a measure is the "
+        "least-squares slope of log error against log dt (ida: log tol) over the scheme's runs");
+  const auto asked = [&](const char* family) {
+    return std::find(families.begin(), families.end(), family) != families.end();
+  };
+  const RunMeasures& ref = reference.measured;
+  if (contact && asked("window") && !ref.contact_first)
+    out.push_back("window: the reference run has no contact, so there is no contact window");
+  else if (contact && asked("window") && ref.active_at_end > 0)
+    out.push_back(
+        "window: the reference is still in contact at t_end; only the start of the window is "
+        "compared");
+  if (contact && ref.contact_first && ref.active_at_end > 0 &&
+      (asked("momenta") || asked("energy")))
+    out.push_back(
+        "the bodies are still in contact at t_end in the reference: their momenta and energies "
+        "are not those after separation (a larger --t-end measures them after it)");
+  if (asked("energy"))
+    out.push_back(
+        "energy split at t_end: the rigid motion of each group is |P|^2/2m + J_c^2/2I_c from "
+        "its mass matrix (P its momentum, J_c its angular momentum and I_c its inertia about its "
+        "centre of mass); vibration = T - the groups' rigid energies + V_int, V_int the potential "
+        "terms invariant under rigid motions (strain energy, springs; not gravity)");
+  std::string round_off, unresolved;
+  const auto summaries = measure_summaries();
+  for (std::size_t k = 0; k < measures.size(); ++k) {
+    if (summaries[k].round_off) round_off += (round_off.empty() ? "" : ", ") + measures[k].id;
+    if (!summaries[k].resolved)
+      unresolved += (unresolved.empty() ? "" : ", ") + measures[k].id + " (" +
+                    join(summaries[k].unresolved_schemes) + ")";
+  }
+  if (!round_off.empty())
+    out.push_back("at round-off in every run (conserved, or zero): " + round_off +
+                  "; no order for them");
+  if (check_reference && reference_check.ok() && !measures.empty())
+    out.push_back(
+        unresolved.empty()
+            ? fmt::format("reference check (em at dt = {:g}): every measure's reference error is "
+                          "below a fifth of the smallest error of the runs",
+                          reference_check.dt)
+            : fmt::format("reference check (em at dt = {:g}): NOT RESOLVED by the reference (its "
+                          "error, the check's difference from it, is above a fifth of the "
+                          "smallest error of the scheme's runs): {}",
+                          reference_check.dt, unresolved));
   return out;
 }
 
 std::optional<double> Study::reference_error_estimate() const {
+  if (!reference.ok()) return std::nullopt;
+  if (check_reference) {
+    if (!reference_check.ok() || !std::isfinite(reference_check.error)) return std::nullopt;
+    return reference_check.error;
+  }
   // With impacts em is not of order 2: no estimate.
-  if (contact || !reference.ok()) return std::nullopt;
+  if (contact) return std::nullopt;
   const StudyRun* finest = nullptr;
   for (const auto& r : runs)
     if (r.scheme == "em" && r.ok() && positive(r.error) && (!finest || r.dt < finest->dt))
@@ -292,6 +242,42 @@ std::optional<double> Study::reference_error_estimate() const {
   // e(h) = C (h^2 - h_ref^2) measured against the reference; its own error is C h_ref^2.
   const double h2 = finest->dt * finest->dt, r2 = reference.dt * reference.dt;
   return finest->error * r2 / (h2 - r2);
+}
+
+std::vector<Study::MeasureSummary> Study::measure_summaries() const {
+  std::vector<MeasureSummary> out(measures.size());
+  for (std::size_t k = 0; k < measures.size(); ++k) {
+    MeasureSummary& m = out[k];
+    m.floor = 1e-10 * measures[k].scale;
+    const auto error_of = [k](const StudyRun& r) {
+      return r.ok() && k < r.measure_errors.size() ? r.measure_errors[k] : std::nan("");
+    };
+    bool any = false;
+    for (const auto& r : runs) {
+      const double e = error_of(r);
+      if (!std::isfinite(e)) continue;
+      any = true;
+      if (e > m.floor && !(e >= m.smallest_error)) m.smallest_error = e;
+    }
+    m.round_off = any && !std::isfinite(m.smallest_error);
+    if (check_reference) m.reference_error = error_of(reference_check);
+    m.resolved = m.round_off || !std::isfinite(m.reference_error) ||
+                 !std::isfinite(m.smallest_error) || m.reference_error <= 0.2 * m.smallest_error;
+    for (const auto& scheme : schemes) {
+      std::vector<double> h, e;
+      double smallest = std::numeric_limits<double>::infinity();
+      for (const auto& r : runs)
+        if (r.scheme == scheme) {
+          h.push_back(r.axis());
+          e.push_back(error_of(r));
+          if (e.back() > m.floor) smallest = std::min(smallest, e.back());
+        }
+      m.orders.push_back(fitted_order(h, e, m.floor));
+      if (!m.resolved && std::isfinite(smallest) && m.reference_error > 0.2 * smallest)
+        m.unresolved_schemes.push_back(scheme);
+    }
+  }
+  return out;
 }
 
 double max_node_distance(const Vec& a, const Vec& b, int dimension) {
@@ -322,14 +308,25 @@ std::optional<double> observed_order(double e1, double e2, double h1, double h2)
 void evaluate_study(Study& study) {
   const Vec& q_ref = study.reference.q_end;
   const bool have_reference = study.reference.ok() && q_ref.size() > 0;
-  const StudyRun* previous = nullptr;
-  for (auto& r : study.runs) {
+  const auto measure = [&](StudyRun& r) {
     r.error = r.error_rel = std::numeric_limits<double>::quiet_NaN();
-    r.order.reset();
-    if (have_reference && r.ok() && r.q_end.size() == q_ref.size()) {
+    r.measure_errors.assign(study.measures.size(), std::numeric_limits<double>::quiet_NaN());
+    if (!have_reference || !r.ok()) return;
+    if (r.q_end.size() == q_ref.size()) {
       r.error = max_node_distance(r.q_end, q_ref, study.dimension);
       if (study.size > 0) r.error_rel = r.error / study.size;
     }
+    for (std::size_t k = 0; k < study.measures.size(); ++k) {
+      const MeasureSpec& spec = study.measures[k];
+      r.measure_errors[k] = measure_error(spec, measure_value(spec, r.measured),
+                                          measure_value(spec, study.reference.measured));
+    }
+  };
+  if (study.check_reference) measure(study.reference_check);
+  const StudyRun* previous = nullptr;
+  for (auto& r : study.runs) {
+    measure(r);
+    r.order.reset();
     if (previous && previous->scheme == r.scheme && previous->ok() && r.ok())
       r.order = observed_order(previous->error, r.error, previous->axis(), r.axis());
     previous = &r;
@@ -340,9 +337,14 @@ std::string study_csv(const Study& study) {
   std::string out =
       "role,scheme,dt,tol,steps,iterations,cpu_seconds,error,error_rel,order,"
       "energy_rel_error_max,linear_momentum_error_max,angular_momentum_rel_error_max,"
-      "constraint_residual_max,status\n";
-  for (const auto& r : study.runs) out += csv_row(r);
-  out += csv_row(study.reference);
+      "constraint_residual_max,status";
+  for (const auto& m : study.measures) out += "," + csv_text(m.id);
+  out += "\n";
+  for (const auto& r : study.runs) out += csv_row(study, r);
+  const auto summaries = study.measure_summaries();
+  for (std::size_t s = 0; s < study.schemes.size(); ++s) out += csv_order_row(study, s, summaries);
+  if (study.check_reference) out += csv_row(study, study.reference_check);
+  out += csv_row(study, study.reference);
   return out;
 }
 
@@ -360,9 +362,11 @@ Json to_json(const Study& study) {
   j["tols"] = study.tols;
   j["reference_error_estimate"] = number_or_null(study.reference_error_estimate());
   j["notes"] = study.notes();
-  j["reference"] = run_json(study.reference);
+  j["reference"] = run_json(study, study.reference);
+  j["reference_check"] =
+      study.check_reference ? run_json(study, study.reference_check) : Json(nullptr);
   Json runs = Json::array();
-  for (const auto& r : study.runs) runs.push_back(run_json(r));
+  for (const auto& r : study.runs) runs.push_back(run_json(study, r));
   j["runs"] = runs;
   // Per scheme, the observed orders between successive steps (tolerances).
   Json orders = Json::object();
@@ -377,6 +381,40 @@ Json to_json(const Study& study) {
     orders[scheme] = list;
   }
   j["orders"] = orders;
+  // The measures: what they are, the reference's value and own error, the
+  // fitted order per scheme.
+  Json groups = Json::array();
+  for (const auto& g : study.groups) groups.push_back(g.name);
+  j["groups"] = groups;
+  Json times = Json::array();
+  for (const auto& t : study.times) times.push_back({{"time", t.time}, {"role", t.role}});
+  j["times"] = times;
+  const auto summaries = study.measure_summaries();
+  Json measures = Json::array();
+  for (std::size_t k = 0; k < study.measures.size(); ++k) {
+    const MeasureSpec& spec = study.measures[k];
+    const Study::MeasureSummary& m = summaries[k];
+    Json e;
+    e["id"] = spec.id;
+    e["family"] = spec.family;
+    e["label"] = spec.label;
+    e["time"] = spec.time;
+    e["scale"] = spec.scale;
+    e["reference_value"] = spec.kind == MeasureKind::Positions
+                               ? Json(nullptr)
+                               : vec_json(measure_value(spec, study.reference.measured));
+    e["reference_error"] = number_or_null(m.reference_error);
+    e["smallest_error"] = number_or_null(m.smallest_error);
+    e["round_off"] = m.round_off;
+    e["resolved"] = m.resolved;
+    e["unresolved_schemes"] = m.unresolved_schemes;
+    Json o = Json::object();
+    for (std::size_t s = 0; s < study.schemes.size(); ++s)
+      o[study.schemes[s]] = number_or_null(m.orders[s]);
+    e["orders"] = o;
+    measures.push_back(e);
+  }
+  j["measures"] = measures;
   return j;
 }
 
@@ -387,17 +425,15 @@ void print_study_table(std::ostream& out, const Study& study) {
                            const std::string& order, const std::string& energy,
                            const std::string& lin, const std::string& ang,
                            const std::string& status) {
-    fmt::print(out, "  {:<10}{:<13}{:>8}{:>11}{:>10}{:>12}{:>12}{:>7}{:>12}{:>12}{:>12}  {}\n",
+    fmt::print(out, "  {:<11}{:<16}{:>8}{:>11}{:>10}{:>12}{:>12}{:>7}{:>12}{:>12}{:>12}  {}\n",
                scheme, axis, steps, iterations, cpu, error, rel, order, energy, lin, ang, status);
   };
   line("scheme", "dt / tol", "steps", "iter.", "CPU s", "error", "rel. error", "order",
        "energy err", "lin. mom.", "ang. mom.", "status");
-  std::vector<const StudyRun*> rows;
-  for (const auto& r : study.runs) rows.push_back(&r);
-  rows.push_back(&study.reference);
-  for (const StudyRun* r : rows) {
-    const std::string scheme = r->reference ? "reference" : r->scheme;
-    const std::string axis = r->reference ? fmt::format("em dt {:g}", r->dt) : axis_label(*r);
+  for (const StudyRun* r : table_rows(study)) {
+    const std::string scheme = role_label(*r);
+    const bool ref = r->reference || r->reference_check;
+    const std::string axis = ref ? fmt::format("em dt {:g}", r->dt) : axis_label(*r);
     if (!r->ran) {
       line(scheme, axis, "-", "-", "-", "-", "-", "-", "-", "-", "-", r->status);
       continue;
@@ -408,6 +444,26 @@ void print_study_table(std::ostream& out, const Study& study) {
          short_sci(r->energy_rel_error_max), short_sci(r->linear_momentum_error_max),
          short_sci(r->angular_momentum_rel_error_max), r->status);
   }
+  if (!study.measures.empty()) {
+    // The measures: the reference's error (the check's), each scheme's order.
+    const auto summaries = study.measure_summaries();
+    std::size_t width = 8;
+    for (const auto& m : study.measures) width = std::max(width, m.label.size() + 2);
+    fmt::print(out, "\n  {:<{}}{:>12}", "measure", width, "ref. error");
+    for (const auto& s : study.schemes) fmt::print(out, "  {:>16}", s + " order");
+    fmt::print(out, "\n");
+    for (std::size_t k = 0; k < study.measures.size(); ++k) {
+      const auto& m = summaries[k];
+      fmt::print(out, "  {:<{}}{:>12}", study.measures[k].label, width,
+                 short_sci(m.reference_error));
+      for (const auto& o : m.orders)
+        fmt::print(out, "  {:>16}", m.round_off ? std::string("round-off") : short_order(o));
+      fmt::print(out, "{}\n",
+                 m.resolved
+                     ? std::string()
+                     : "  (not resolved by the reference: " + join(m.unresolved_schemes) + ")");
+    }
+  }
   for (const auto& note : study.notes()) fmt::print(out, "  note: {}\n", note);
 }
 
@@ -415,30 +471,6 @@ void write_study_tables(const std::string& dir, const Study& study) {
   write_atomically((fs::path(dir) / "study.csv").string(), study_csv(study), "study table");
   write_atomically((fs::path(dir) / "study.json").string(), to_json(study).dump(2) + "\n",
                    "study summary");
-}
-
-void write_study_report(const std::string& dir, const ReportInfo& info, const Study& study) {
-  std::string schemes;
-  for (const auto& s : study.schemes) schemes += (schemes.empty() ? "" : ", ") + s;
-  std::string html = page_head("emdae study: " + info.scene_name + " (" + schemes + ")");
-  html += header_html(info, "study of <code>" + html_escape(schemes) + "</code>" +
-                                (study.complete ? "" : ", <strong>interrupted</strong>"));
-  html += "<section id=\"notes\">\n<ul>\n";
-  for (const auto& note : study.notes()) html += "<li>" + html_escape(note) + "</li>\n";
-  html += "</ul>\n</section>\n";
-  html += "<section id=\"figures\">\n<h2>Convergence and work-precision</h2>\n" +
-          figures_html(study_figures(study), probe_gnuplot(), "study.csv") + "</section>\n";
-  html += "<section id=\"table\">\n<h2>Runs</h2>\n" + table_html(study) +
-          "<p class=\"note\">Observed order: log(e<sub>i</sub> / e<sub>i+1</sub>) / "
-          "log(h<sub>i</sub> / h<sub>i+1</sub>) between a scheme's successive step sizes (for "
-          "ida: tolerances). Energy and momentum errors are the maxima over the run, as in a "
-          "run's summary.json.</p>\n</section>\n";
-  html += "<section id=\"settings\">\n<h2>Settings</h2>\n<table class=\"settings\">\n";
-  for (const auto& [k, v] : info.settings)
-    html += "<tr><th>" + html_escape(k) + "</th><td>" + html_escape(v) + "</td></tr>\n";
-  html += "</table>\n</section>\n";
-  html += page_foot({"study.csv", "study.json"});
-  write_atomically((fs::path(dir) / "study.html").string(), html, "study page");
 }
 
 }  // namespace emdae

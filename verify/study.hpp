@@ -18,6 +18,17 @@
 // Newton or IDA iterations, CPU seconds of the integration, the maximal
 // relative energy error and the momentum errors) and its status.
 //
+// The measures (verify/study_measures.hpp) compare more than the positions
+// at t_end: positions at chosen times, the contact window, each group's
+// momenta and the split of the energy into rigid motion and vibration. Each
+// gets an error per run and, per scheme, an observed order: the
+// least-squares slope of log error against log dt (ida: log tol) over the
+// scheme's runs. The reference is checked by a second reference run at twice
+// its step: their difference per measure estimates (from above, when the
+// measure converges) the reference's own error, and a measure whose
+// estimate is not well below (a fifth of) the smallest error of a scheme's
+// runs is flagged as not resolved by the reference for that scheme.
+//
 // This file holds the figures and the files of a study (study.csv,
 // study.json, study.html); the runs themselves are made by the emdae
 // command (cli/study_command.cpp) through run() of run/run.hpp, as `emdae run`.
@@ -32,6 +43,7 @@
 
 #include "core/system.hpp"
 #include "verify/report.hpp"
+#include "verify/study_measures.hpp"
 #include "verify/summary.hpp"
 
 namespace emdae {
@@ -42,6 +54,7 @@ struct StudyRun {
   double dt = 0.0;                 // the step; for ida its output interval
   std::optional<double> tol;       // ida: rtol = atol
   bool reference = false;          // the reference run (em at the reference step)
+  bool reference_check = false;    // the second reference (em at twice its step)
   bool ran = false;                // false: not run (the study was interrupted)
   std::string status = "not run";  // "ok" or what failed
   long steps = 0;
@@ -50,12 +63,14 @@ struct StudyRun {
   double energy_rel_error_max = std::numeric_limits<double>::quiet_NaN();
   std::optional<double> linear_momentum_error_max, angular_momentum_rel_error_max;
   double constraint_residual_max = std::numeric_limits<double>::quiet_NaN();
-  Vec q_end;  // positions at t_end; empty when the run did not get there
+  Vec q_end;             // positions at t_end; empty when the run did not get there
+  RunMeasures measured;  // set when the run finished (ok)
 
   // From evaluate_study():
   double error = std::numeric_limits<double>::quiet_NaN();
   double error_rel = std::numeric_limits<double>::quiet_NaN();
-  std::optional<double> order;  // against the previous run of the scheme
+  std::optional<double> order;         // against the previous run of the scheme
+  std::vector<double> measure_errors;  // per Study::measures; NaN where there is none
 
   bool ok() const { return status == "ok"; }
   /// The value the run is varied by: dt, or ida's tolerance.
@@ -73,6 +88,17 @@ struct Study {
   std::vector<std::string> schemes;
   std::vector<double> dts, tols;  // as run: largest step (loosest tolerance) first
   StudyRun reference;
+  /// The second reference (reference_check): `emdae study` runs it unless
+  /// told not to.
+  bool check_reference = false;
+  StudyRun reference_check;
+  /// The measures: the families asked for, the groups whose momenta and
+  /// energies are measured, the times positions are compared at, and what
+  /// was made of them once the reference finished (define_measures()).
+  std::vector<std::string> families;
+  std::vector<NodeGroup> groups;
+  std::vector<ChosenTime> times;
+  std::vector<MeasureSpec> measures;
   /// Scheme by scheme in the order of `schemes`, each from its largest step
   /// (loosest tolerance) down.
   std::vector<StudyRun> runs;
@@ -81,9 +107,27 @@ struct Study {
   /// What a reader must know to read the figures (space vs time error; what
   /// impacts do to orders).
   std::vector<std::string> notes() const;
-  /// The reference's own error, from em's finest run e(h) = C (h^2 - h_ref^2)
-  /// as C h_ref^2, assuming order 2; empty with contact or without such a run.
+  /// The reference's own error in the positions at t_end: with the check,
+  /// the check's distance from the reference; without it, from em's finest
+  /// run e(h) = C (h^2 - h_ref^2) as C h_ref^2, assuming order 2 (empty with
+  /// contact or without such a run).
   std::optional<double> reference_error_estimate() const;
+
+  /// What the runs make of a measure.
+  struct MeasureSummary {
+    double reference_error = std::numeric_limits<double>::quiet_NaN();  // the check's
+    double smallest_error = std::numeric_limits<double>::quiet_NaN();   // over the runs, > floor
+    double floor = 0.0;      // round-off: 1e-10 x the measure's scale
+    bool round_off = false;  // every run's error is at round-off (a conserved quantity)
+    bool resolved = true;    // the reference error is at most a fifth of smallest_error
+    std::vector<std::optional<double>> orders;  // per scheme (fitted_order)
+    /// The schemes (of `schemes`) whose own smallest error is below five
+    /// times the reference error: their errors and order measure the
+    /// reference as much as the runs. Empty if and only if resolved.
+    std::vector<std::string> unresolved_schemes;
+  };
+  /// Per measure, in the order of `measures` (after evaluate_study()).
+  std::vector<MeasureSummary> measure_summaries() const;
 };
 
 /// max over nodes of |a_node - b_node| (nodes of `dimension` coordinates).
@@ -95,10 +139,12 @@ double bounding_box_diagonal(const Vec& q, int dimension);
 std::optional<double> observed_order(double e1, double e2, double h1, double h2);
 
 /// Errors against the reference and observed orders of every run (runs
-/// without a final state, or all of them without a reference, get none).
+/// without a final state, or all of them without a reference, get none),
+/// and the errors of every measure (and of the check against the reference).
 void evaluate_study(Study& study);
 
-/// One row per run (the study's runs, then the reference).
+/// One row per run (the study's runs, a row `order` per scheme with the
+/// fitted orders, the check, then the reference), a column per measure.
 std::string study_csv(const Study& study);
 nlohmann::ordered_json to_json(const Study& study);
 /// The table printed by `emdae study`.
