@@ -56,11 +56,19 @@ double ActiveSet::gap_rate(int id, const Vec& q, const Vec& v) const {
 
 Transitions ActiveSet::begin(State& s) const {
   const std::vector<int> before = s.active;
+  drop_disengaged(s);
+  enter_closed(s);
+  return transitions(before, s.active);
+}
+
+void ActiveSet::drop_disengaged(State& s) const {
   for (std::size_t k = s.active.size(); k-- > 0;)
     if (!std::isfinite(gap(s.active[k], s.q))) release_candidate(s, k);
+}
+
+void ActiveSet::enter_closed(State& s) const {
   for (int id = 0; id < system_.n_unilateral(); ++id)
     if (!is_active(s, id) && std::abs(gap(id, s.q)) <= tol_) activate_candidate(s, id);
-  return transitions(before, s.active);
 }
 
 std::vector<std::size_t> ActiveSet::tensile(const State& s, const Vec& lambda,

@@ -64,8 +64,11 @@ class ActiveSet {
   double gap_rate(int id, const Vec& q, const Vec& v) const;
 
   /// Start of a (sub-)step: active nodes no longer engaged leave; inactive
-  /// nodes closed at s.q enter. Returns the transitions made.
+  /// nodes closed at s.q enter (the two halves below). Returns the
+  /// transitions made.
   Transitions begin(State& s) const;
+  void drop_disengaged(State& s) const;
+  void enter_closed(State& s) const;
 
   /// Active nodes (positions in s.active) whose multiplier in `lambda`
   /// (laid out as in s.lambda) is tensile, `keep` excepted; descending order,

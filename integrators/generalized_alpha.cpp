@@ -315,7 +315,8 @@ GeneralizedAlphaStepper::GeneralizedAlphaStepper(const System& system,
     : system_(system),
       p_(settings),
       newton_(newton),
-      gap_tol_(settings.gap_tolerance > 0 ? settings.gap_tolerance : 10 * newton.tolerance) {
+      active_set_(system,
+                  settings.gap_tolerance > 0 ? settings.gap_tolerance : 10 * newton.tolerance) {
   p_.validate();
   system_.validate();
   if (system_.has_massless_nodes())
@@ -404,18 +405,6 @@ GeneralizedAlphaStepper::Trial GeneralizedAlphaStepper::solve(const State& s, do
   return tr;
 }
 
-double GeneralizedAlphaStepper::inactive_below(const State& s, const Vec& q, double threshold,
-                                               std::vector<int>& below) const {
-  double g = std::numeric_limits<double>::infinity();
-  for (int id = 0; id < system_.n_unilateral(); ++id) {
-    if (contains(s.active, id)) continue;
-    const double gi = system_.unilateral_gap(id, q);
-    g = std::min(g, gi);
-    if (gi < threshold) below.push_back(id);
-  }
-  return g;
-}
-
 StepStats GeneralizedAlphaStepper::step(State& state, double dt) {
   const int n = system_.n_dofs();
   const int m_sys = system_.n_constraints();
@@ -435,10 +424,7 @@ StepStats GeneralizedAlphaStepper::step(State& state, double dt) {
   if (s.lambda.size() != m_sys + static_cast<Eigen::Index>(s.active.size()))
     s.lambda = Vec::Zero(m_sys + static_cast<Eigen::Index>(s.active.size()));
   // Active nodes no longer engaged (nothing of the master opposite) leave.
-  for (std::size_t k = s.active.size(); k-- > 0;)
-    if (!system_.unilateral_term(s.active[k]) ||
-        !std::isfinite(system_.unilateral_gap(s.active[k], s.q)))
-      deactivate_candidate(s, m_sys, k);
+  if (contact) active_set_.drop_disengaged(s);
   if (!continues(state)) {
     try {
       start(s);
@@ -454,14 +440,13 @@ StepStats GeneralizedAlphaStepper::step(State& state, double dt) {
     active_ = state.active;
   }
   StepStats stats;
-  int events = 0;
-  if (contact) {
-    // Inactive nodes already touching at t_n enter now (their gap is closed).
-    std::vector<int> touching;
-    inactive_below(s, s.q, gap_tol_, touching);
-    for (int id : touching) activate_candidate(s, id);
-  }
+  // Inactive nodes already touching at t_n enter now (their gap is closed).
+  if (contact) active_set_.enter_closed(s);
 
+  // The decisions are integrators/active_set.hpp's; what galpha does at an
+  // impact is fixed: the penetrating nodes enter for the whole step (no
+  // sub-steps: its acceleration history belongs to whole steps), which makes
+  // each node's impact inelastic.
   std::vector<int> released;  // released in this step
   std::vector<int> pinned;    // re-activated after a release: not released again
   const int max_passes = 4 * system_.n_unilateral() + 8;
@@ -481,28 +466,20 @@ StepStats GeneralizedAlphaStepper::step(State& state, double dt) {
     if (contact) {
       s.lambda = tr.state.lambda;  // better guesses for a re-solve
       // 1. Release active nodes whose multiplier turned tensile.
-      bool changed = false;
-      for (std::size_t k = s.active.size(); k-- > 0;) {
-        const int id = s.active[k];
-        if (tr.state.lambda[m_sys + static_cast<Eigen::Index>(k)] > 0.0 && !contains(pinned, id)) {
-          released.push_back(id);
-          deactivate_candidate(s, m_sys, k);
-          ++events;
-          changed = true;
-        }
+      const std::vector<std::size_t> tensile = active_set_.tensile(s, tr.state.lambda, pinned);
+      for (std::size_t k : tensile) {
+        released.push_back(s.active[k]);
+        release_candidate(s, k);
       }
-      if (changed) continue;
+      if (!tensile.empty()) continue;
       // 2. Inactive nodes penetrating at the end of the step enter for the
-      // whole step (no impact location: the constraint holds at t_{n+1}).
-      std::vector<int> penetrating;
-      inactive_below(s, tr.state.q, -gap_tol_, penetrating);
+      // whole step (the constraint holds at t_{n+1}); one released in this
+      // step is not released again.
+      const std::vector<int> penetrating = active_set_.penetrating(s, tr.state.q);
       if (!penetrating.empty()) {
         for (int id : penetrating) {
           activate_candidate(s, id);
-          if (contains(released, id))
-            pinned.push_back(id);
-          else
-            ++events;
+          if (contains(released, id)) pinned.push_back(id);
         }
         continue;
       }
@@ -513,7 +490,10 @@ StepStats GeneralizedAlphaStepper::step(State& state, double dt) {
         ((1 - p_.alpha_f) * tr.e + p_.alpha_f * e_ - p_.alpha_m * ea_) / (1 - p_.alpha_m);
     const Vec impulse = h * ((1 - p_.gamma) * ea_ + p_.gamma * ea1);
     stats.converged = true;
-    stats.contact_events = events;
+    const Transitions t = transitions(state.active, tr.state.active);
+    stats.contact_entries = t.entries;
+    stats.contact_exits = t.exits;
+    stats.contact_events = t.total();
     stats.external_work = 0.5 * (load_ + tr.load).dot(tr.state.q - state.q);
     const int dim = system_.dim();
     const Vec qm = 0.5 * (state.q + tr.state.q);

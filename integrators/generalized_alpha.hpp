@@ -25,6 +25,7 @@
 #include <string>
 #include <vector>
 
+#include "integrators/active_set.hpp"
 #include "integrators/stepper.hpp"
 
 namespace emdae {
@@ -83,8 +84,6 @@ class GeneralizedAlphaStepper final : public Stepper {
   Trial solve(const State& s, double dt);
   std::vector<const Term*> active_terms(const std::vector<int>& active) const;
   /// Inactive candidates with gap < threshold at q (appended to `below`); the min gap.
-  double inactive_below(const State& s, const Vec& q, double threshold,
-                        std::vector<int>& below) const;
   /// Loads plus support reactions at (q, t), per dof (see the header comment).
   Vec external_forces(const std::vector<const Term*>& extra, const Vec& q, double t, const Vec& qdd,
                       const Vec& lambda, const Vec& load) const;
@@ -92,7 +91,7 @@ class GeneralizedAlphaStepper final : public Stepper {
   const System& system_;
   GeneralizedAlphaSettings p_;
   NewtonSolver newton_;
-  double gap_tol_;
+  ActiveSet active_set_;
   // The state handed out last, with its accelerations, its loads f, its
   // external forces e (loads and support reactions) and their
   // alpha-weighted counterpart ea (the recursion of a applied to e).
