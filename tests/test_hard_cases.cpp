@@ -37,8 +37,8 @@
 #include <string>
 #include <vector>
 
-#include "cli/scene.hpp"
 #include "impact_checks.hpp"
+#include "scene/scene.hpp"
 #include "temp_dir.hpp"
 
 namespace emdae {
