@@ -179,8 +179,10 @@ StepStats ContactStepper::substep(SubstepScheme& scheme, State& s, double h) {
 
   std::vector<int> pinned;  // closed at the start, re-entered: not released again
   // Massless nodes that hit enter for the whole sub-step (below); should
-  // that solve fail, the sub-step is tried again from its start with their
-  // impacts located like any other's.
+  // that solve fail and impacts be located (scheme.impact = locate), the
+  // sub-step is tried again from its start with their impacts located like
+  // any other's. Under the other treatments the retry would repeat the
+  // same solve.
   const State start = s;
   bool algebraic_entered = false, locate_algebraic = false;
   const int max_attempts = 4 * system_.n_unilateral() + 8;
@@ -203,7 +205,8 @@ StepStats ContactStepper::substep(SubstepScheme& scheme, State& s, double h) {
     if (have_guess) guess.lambda = carried_multipliers(guess_state_active, guess_lambda, s);
     StepStats r = scheme.solve_substep(trial, h, targets.gap, have_guess ? &guess : nullptr);
     add_up(total, r);
-    if (!r.converged && algebraic_entered && !locate_algebraic) {
+    if (!r.converged && algebraic_entered && !locate_algebraic &&
+        impact_ == ImpactTreatment::Locate) {
       s = start;
       pinned.clear();
       have_guess = false;

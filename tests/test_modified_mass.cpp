@@ -103,17 +103,19 @@ TEST(ModifiedMass, ARefusedSurfaceChangesNothing) {
   }
 }
 
-// The paper's rings (examples/ring_impact_modified_mass.toml) started closer,
-// as in examples/hard/ring_impact_refined_5k.toml: they meet at t ~ 0.5 and
-// part before t = 12.
-std::unique_ptr<Model> ring_impact(bool modified_mass, int around = 64, int through = 1) {
+// The paper's rings (examples/ring_impact_modified_mass.toml): centres
+// 2 * half_distance apart in x, the right one 20 higher. The paper's start
+// is half_distance = 110; at 55 (examples/hard/ring_impact_refined_5k.toml)
+// they meet at t ~ 0.5 and part before t = 12.
+std::unique_ptr<Model> ring_impact(bool modified_mass, double half_distance = 55.0, int around = 64,
+                                   int through = 1) {
   auto model = std::make_unique<Model>(2);
   Model& m = *model;
   BodyOptions left, right;
   left.velocity = {10.0, 0.0};
   right.velocity = {-10.0, 0.0};
-  m.add_body("left", ring_mesh({-55.0, 0.0}, 47.0, 50.0, around, through), kRing, left);
-  m.add_body("right", ring_mesh({55.0, 20.0}, 47.0, 50.0, around, through), kRing, right);
+  m.add_body("left", ring_mesh({-half_distance, 0.0}, 47.0, 50.0, around, through), kRing, left);
+  m.add_body("right", ring_mesh({half_distance, 20.0}, 47.0, 50.0, around, through), kRing, right);
   ContactOptions options;
   options.modified_mass = modified_mass;
   add_mortar_contact(m, "left.outer", "right.outer", "rings", options);
@@ -130,7 +132,7 @@ RunSettings settings(double dt, double t_end, const std::string& scheme = "em") 
 }
 
 TEST(ModifiedMass, GeneralizedAlphaAndIdaSayTheyNeedMassAtEveryNode) {
-  const auto model = ring_impact(true, 16, 1);
+  const auto model = ring_impact(true, 55.0, 16, 1);
   const Model& m = *model;
   EXPECT_NE(scheme_refusal(m, settings(0.01, 1.0, "galpha")).find("mass at every node"),
             std::string::npos);
@@ -192,24 +194,11 @@ double position_error(const State& a, const State& b) {
 // against em at 0.000625. A few minutes: label study.
 TEST(ModifiedMassStudy, RingImpactPositionsConvergeAsTheStepHalves) {
   if (!std::getenv("EMDAE_STUDY")) GTEST_SKIP() << "a study: ctest --preset study";
-  auto paper = [](bool modified) {
-    auto model = std::make_unique<Model>(2);
-    Model& m = *model;
-    BodyOptions left, right;
-    left.velocity = {10.0, 0.0};
-    right.velocity = {-10.0, 0.0};
-    m.add_body("left", ring_mesh({-110.0, 0.0}, 47.0, 50.0, 64, 1), kRing, left);
-    m.add_body("right", ring_mesh({110.0, 20.0}, 47.0, 50.0, 64, 1), kRing, right);
-    ContactOptions options;
-    options.modified_mass = modified;
-    add_mortar_contact(m, "left.outer", "right.outer", "rings", options);
-    return model;
-  };
-  const RunResult ref = run(*paper(true), settings(0.000625, 8.0));
+  const RunResult ref = run(*ring_impact(true, 110.0), settings(0.000625, 8.0));
   ASSERT_TRUE(ref.finished()) << ref.summary.status;
   std::vector<double> errors;
   for (double dt : {0.02, 0.01, 0.005}) {
-    const RunResult r = run(*paper(true), settings(dt, 8.0));
+    const RunResult r = run(*ring_impact(true, 110.0), settings(dt, 8.0));
     ASSERT_TRUE(r.finished()) << r.summary.status;
     EXPECT_LE(r.summary.energy_rel_error_max, 1e-10) << "dt " << dt;
     errors.push_back(position_error(r.state, ref.state));
