@@ -70,6 +70,12 @@ std::vector<Treatment> treatments() {
     m.scheme = scheme;
     m.modified_mass = true;
     list.push_back(m);
+    for (double gamma : {1.0, 10.0}) {  // epsilon = gamma E / h
+      Treatment p;
+      p.scheme = scheme;
+      p.penalty = gamma;
+      list.push_back(p);
+    }
   }
   Treatment lumped;  // separates the lumping of the modified mass from its masslessness
   lumped.lumped_mass = true;
@@ -355,15 +361,17 @@ int main_(const Options& opt) {
     rows.push_back(row);
   }
 
-  // Schemes that refuse the modified mass.
-  st.md << "\n## The modified mass with galpha and ida\n\n";
-  for (const char* scheme : {"galpha", "ida"}) {
-    Treatment t;
-    t.scheme = scheme;
-    t.modified_mass = true;
-    const BarWallErrors e = run_bar_wall(st.bar(10), t, 0.1);
-    st.md << "- " << scheme << ": " << (e.ok ? "ran (unexpected)" : e.message) << "\n";
-  }
+  // Schemes that refuse the modified mass and the penalty.
+  st.md << "\n## The modified mass and the penalty with galpha and ida\n\n";
+  for (const char* scheme : {"galpha", "ida"})
+    for (bool modified : {true, false}) {
+      Treatment t;
+      t.scheme = scheme;
+      t.modified_mass = modified;
+      t.penalty = modified ? 0.0 : 1.0;
+      const BarWallErrors e = run_bar_wall(st.bar(10), t, 0.1);
+      st.md << "- " << t.label() << ": " << (e.ok ? "ran (unexpected)" : e.message) << "\n";
+    }
 
   // How far the finite-strain answer is from linear theory.
   if (!opt.quick && opt.only.empty()) {

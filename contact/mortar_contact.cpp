@@ -1,6 +1,7 @@
 #include "contact/mortar_contact.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <limits>
 #include <map>
 #include <stdexcept>
@@ -24,6 +25,14 @@ MortarContact::MortarContact(const System& system, ContactSurface slave, Contact
       master_(std::move(master)),
       options_(options) {
   if (system.dim() != 2) throw std::invalid_argument(name_ + ": mortar contact is planar (2D)");
+  if (!(options_.penalty >= 0.0) || !std::isfinite(options_.penalty))
+    throw std::invalid_argument(name_ +
+                                ": the penalty parameter must be finite and >= 0, received " +
+                                std::to_string(options_.penalty));
+  if (options_.penalty > 0.0 && options_.modified_mass)
+    throw std::invalid_argument(name_ +
+                                ": a penalty contact keeps the nodes' mass; give either a penalty "
+                                "or modified_mass, not both");
   if (slave_.edges.empty() || master_.edges.empty())
     throw std::invalid_argument(name_ + ": slave and master surfaces need at least one segment");
   std::map<int, int> index;
@@ -59,6 +68,10 @@ MortarContact::MortarContact(const System& system, ContactSurface slave, Contact
 
 std::string MortarContact::describe(int i) const {
   return "slave node " + std::to_string(slave_node(i)) + " of contact '" + name_ + "'";
+}
+
+double MortarContact::penalty(int i) const {
+  return options_.penalty * weights_[static_cast<std::size_t>(i)];
 }
 
 double MortarContact::gap(int i, const Vec& q) const {

@@ -29,6 +29,12 @@ struct ContactOptions {
   /// Both surfaces massless, their mass moved within their bodies
   /// (core/modified_mass.hpp); contact/contact_pair.hpp applies it.
   bool modified_mass = false;
+  /// Penalty parameter epsilon (pressure per unit penetration); 0: the
+  /// contact conditions hold exactly (Lagrange multipliers). With epsilon >
+  /// 0 every slave node A carries the potential epsilon w_A / 2 min(Phi_A,
+  /// 0)^2, the mortar form of epsilon / 2 int min(g, 0)^2: pressure p_A =
+  /// epsilon max(-Phi_A, 0), penetration p / epsilon.
+  double penalty = 0.0;
 };
 
 class MortarContact final : public UnilateralConstraints {
@@ -45,6 +51,8 @@ class MortarContact final : public UnilateralConstraints {
   double gap(int i, const Vec& q) const override;
   static constexpr double kMinCoverage = 1e-2;
   std::string describe(int i) const override;
+  /// epsilon w_A when the contact is penalized, else 0.
+  double penalty(int i) const override;
 
   int slave_node(int i) const { return slave_nodes_[static_cast<std::size_t>(i)]; }
   /// Mortar weight int N_A dGamma of slave node i in the reference configuration.

@@ -14,7 +14,21 @@ double potential_energy(const System& system, const Vec& q, double t) {
     gather(*term, q, local);
     v += term->value(local, t);
   }
-  return v;
+  return v + penalty_energy(system, q);
+}
+
+double penalty_energy(const System& system, const Vec& q) {
+  double e = 0.0;
+  Vec local;
+  for (int id = 0; id < system.n_unilateral(); ++id) {
+    const double k = system.unilateral_penalty(id);
+    const Term* term = k > 0.0 ? system.unilateral_term(id) : nullptr;
+    if (!term) continue;
+    gather(*term, q, local);
+    const double phi = std::min(term->value(local, 0.0), 0.0);
+    e += 0.5 * k * phi * phi;
+  }
+  return e;
 }
 
 double constraint_residual(const System& system, const Vec& q, double t) {

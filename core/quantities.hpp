@@ -22,8 +22,11 @@ Quantities measure(const System& system, const Vec& q, const Vec& v, double t);
 /// x: momenta from (q, M v), impulse balances from (positions, impulses).
 void resultant_and_moment(int dim, const Vec& x, const Vec& f, Vec& resultant, Vec& moment);
 
-/// Sum of the potential terms at (q, t).
+/// V(q, t): the potential terms, and the penalty energies of penalized
+/// contact candidates with a prepared function (core/unilateral.hpp).
 double potential_energy(const System& system, const Vec& q, double t);
+/// Sum over penalized candidates of k_i / 2 min(Phi_i(q), 0)^2.
+double penalty_energy(const System& system, const Vec& q);
 
 /// Max |Phi_l(q, t)| over the constraint terms (0 without constraints).
 double constraint_residual(const System& system, const Vec& q, double t);

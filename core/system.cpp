@@ -107,6 +107,17 @@ double System::unilateral_gap(int id, const Vec& q) const {
   return unilateral_[static_cast<std::size_t>(set)]->gap(i, q);
 }
 
+double System::unilateral_penalty(int id) const {
+  const auto [set, i] = unilateral_candidate(id);
+  return unilateral_[static_cast<std::size_t>(set)]->penalty(i);
+}
+
+bool System::has_penalty_contact() const {
+  for (int id = 0; id < n_unilateral(); ++id)
+    if (unilateral_penalty(id) > 0.0) return true;
+  return false;
+}
+
 std::unique_ptr<Term> System::pop_constraint() {
   if (constraints_.empty()) throw std::logic_error("System::pop_constraint: no constraint");
   std::unique_ptr<Term> t = std::move(constraints_.back());

@@ -95,6 +95,10 @@ class System {
   const Term* unilateral_term(int id) const;
   /// Its gap at q, +infinity when not engaged (UnilateralConstraints::gap).
   double unilateral_gap(int id, const Vec& q) const;
+  /// Its penalty stiffness (UnilateralConstraints::penalty), 0 when exact.
+  double unilateral_penalty(int id) const;
+  /// True when some candidate is penalized.
+  bool has_penalty_contact() const;
   void fix_node(int node);
 
   const std::vector<std::unique_ptr<Term>>& potentials() const { return potentials_; }

@@ -38,6 +38,15 @@ class UnilateralConstraints {
   virtual double gap(int i, const Vec& q) const = 0;
   /// Describes candidate i for messages ("slave node 17 of ring_a").
   virtual std::string describe(int i) const = 0;
+  /// Penalty stiffness k_i of candidate i, or 0 (the default) for an exact
+  /// constraint. A penalized candidate is no constraint but the potential
+  ///
+  ///   P_i(q) = k_i / 2 * min(Phi_i(q), 0)^2,   lambda_i = dP_i/dPhi_i <= 0,
+  ///
+  /// of the prepared function: it is in the stepper's active set whenever it
+  /// has a function, its multiplier is that force (integrators/step_problem.hpp:
+  /// the discrete derivative of P_i under em), and P_i counts in the energy.
+  virtual double penalty(int /*i*/) const { return 0.0; }
 };
 
 }  // namespace emdae

@@ -62,20 +62,39 @@ Transitions ActiveSet::begin(State& s) const {
 }
 
 void ActiveSet::drop_disengaged(State& s) const {
-  for (std::size_t k = s.active.size(); k-- > 0;)
-    if (!std::isfinite(gap(s.active[k], s.q))) release_candidate(s, k);
+  for (std::size_t k = s.active.size(); k-- > 0;) {
+    const int id = s.active[k];
+    const bool gone =
+        penalized(id) ? system_.unilateral_term(id) == nullptr : !std::isfinite(gap(id, s.q));
+    if (gone) release_candidate(s, k);
+  }
 }
 
 void ActiveSet::enter_closed(State& s) const {
-  for (int id = 0; id < system_.n_unilateral(); ++id)
-    if (!is_active(s, id) && std::abs(gap(id, s.q)) <= tol_) activate_candidate(s, id);
+  for (int id = 0; id < system_.n_unilateral(); ++id) {
+    if (is_active(s, id)) continue;
+    const bool enters =
+        penalized(id) ? system_.unilateral_term(id) != nullptr : std::abs(gap(id, s.q)) <= tol_;
+    if (enters) activate_candidate(s, id);
+  }
+}
+
+bool ActiveSet::penalized(int id) const {
+  return system_.unilateral_penalty(id) > 0.0;
+}
+
+void ActiveSet::drop_unloaded_penalized(State& s) const {
+  for (std::size_t k = s.active.size(); k-- > 0;)
+    if (penalized(s.active[k]) && s.lambda[n_static_ + static_cast<Eigen::Index>(k)] == 0.0)
+      release_candidate(s, k);
 }
 
 std::vector<std::size_t> ActiveSet::tensile(const State& s, const Vec& lambda,
                                             const std::vector<int>& keep) const {
   std::vector<std::size_t> out;
   for (std::size_t k = s.active.size(); k-- > 0;)
-    if (lambda[n_static_ + static_cast<Eigen::Index>(k)] > 0.0 && !contains(keep, s.active[k]))
+    if (lambda[n_static_ + static_cast<Eigen::Index>(k)] > 0.0 && !contains(keep, s.active[k]) &&
+        !penalized(s.active[k]))
       out.push_back(k);
   return out;
 }
@@ -83,14 +102,14 @@ std::vector<std::size_t> ActiveSet::tensile(const State& s, const Vec& lambda,
 std::vector<int> ActiveSet::penetrating(const State& s, const Vec& q) const {
   std::vector<int> out;
   for (int id = 0; id < system_.n_unilateral(); ++id)
-    if (!is_active(s, id) && gap(id, q) < -tol_) out.push_back(id);
+    if (!is_active(s, id) && !penalized(id) && gap(id, q) < -tol_) out.push_back(id);
   return out;
 }
 
 std::vector<int> ActiveSet::open(const State& s, const Vec& q) const {
   std::vector<int> out;
   for (int id = 0; id < system_.n_unilateral(); ++id)
-    if (!is_active(s, id) && gap(id, q) > tol_) out.push_back(id);
+    if (!is_active(s, id) && !penalized(id) && gap(id, q) > tol_) out.push_back(id);
   return out;
 }
 
@@ -111,10 +130,12 @@ ActiveSet::Targets ActiveSet::targets(const State& s) const {
   t.closed = Vec::Zero(static_cast<Eigen::Index>(s.active.size()));
   for (std::size_t k = 0; k < s.active.size(); ++k) {
     const double g = gap(s.active[k], s.q);
-    const bool closed = std::abs(g) <= tol_;
+    // A penalized node has no target (its row is its force law) and is
+    // never an entry to correct.
+    const bool closed = std::abs(g) <= tol_ || penalized(s.active[k]);
     t.closed[static_cast<Eigen::Index>(k)] = closed ? 1.0 : 0.0;
     t.gap[static_cast<Eigen::Index>(k)] =
-        persistency_ && closed && !algebraic(s.active[k]) ? g : 0.0;
+        persistency_ && closed && !algebraic(s.active[k]) && !penalized(s.active[k]) ? g : 0.0;
   }
   return t;
 }

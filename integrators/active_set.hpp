@@ -65,10 +65,19 @@ class ActiveSet {
 
   /// Start of a (sub-)step: active nodes no longer engaged leave; inactive
   /// nodes closed at s.q enter (the two halves below). Returns the
-  /// transitions made.
+  /// transitions made. Penalized candidates (a penalty contact,
+  /// core/unilateral.hpp) are active exactly when they have a function for
+  /// the step: their rows are their force law, never released, never an
+  /// impact.
   Transitions begin(State& s) const;
   void drop_disengaged(State& s) const;
   void enter_closed(State& s) const;
+
+  /// Whether candidate `id` is penalized (UnilateralConstraints::penalty > 0).
+  bool penalized(int id) const;
+  /// After an accepted (sub-)step: penalized nodes that carry no force
+  /// leave, so that the active set is the nodes in contact, as for exact ones.
+  void drop_unloaded_penalized(State& s) const;
 
   /// Active nodes (positions in s.active) whose multiplier in `lambda`
   /// (laid out as in s.lambda) is tensile, `keep` excepted; descending order,

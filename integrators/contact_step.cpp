@@ -169,6 +169,7 @@ StepStats ContactStepper::substep(SubstepScheme& scheme, State& s, double h) {
   auto accept = [&](State& end, const StepStats& r) {
     last_h_ = end.t - s.t;
     s = std::move(end);
+    set_.drop_unloaded_penalized(s);
     add_accepted(total, r);
     const Transitions t = transitions(before, s.active);
     total.contact_entries = t.entries;

@@ -323,6 +323,10 @@ GeneralizedAlphaStepper::GeneralizedAlphaStepper(const System& system,
     throw std::invalid_argument(
         "generalized-alpha needs mass at every node; a modified mass (massless contact nodes) is "
         "integrated by em and midpoint");
+  if (system_.has_penalty_contact())
+    throw std::invalid_argument(
+        "generalized-alpha has no penalty contact; a penalty contact is integrated by em and "
+        "midpoint");
 }
 
 bool GeneralizedAlphaStepper::continues(const State& state) const {

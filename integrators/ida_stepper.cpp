@@ -461,6 +461,10 @@ IdaStepper::IdaStepper(const System& system, IdaSettings settings)
     throw std::invalid_argument(
         "IDA needs mass at every node; a modified mass (massless contact nodes) is integrated by "
         "em and midpoint");
+  if (system.has_penalty_contact())
+    throw std::invalid_argument(
+        "IDA has no penalty contact (its contact is exact, with root-found impacts); a penalty "
+        "contact is integrated by em and midpoint");
   if (!(settings.rtol > 0) || !(settings.atol > 0))
     throw std::invalid_argument("IdaStepper: tolerances must be positive, received rtol = " +
                                 std::to_string(settings.rtol) +

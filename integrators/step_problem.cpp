@@ -41,6 +41,18 @@ StepProblem::StepProblem(const System& s, GradientKind kind, const State& start,
       sum += 2.0 * mass[i] / (dt * dt) + full_stiffness[i], ++count;
   kappa_ = count ? sum / count : 1.0;
   kinetic0_ = 0.5 * v0_.dot(s_.mass() * v0_);
+  penalty_ = Vec::Zero(m_);
+  const int ms = s_.n_constraints();
+  for (std::size_t k = 0; k < extra.size(); ++k) {
+    const double pk = k < start.active.size() ? s_.unilateral_penalty(start.active[k]) : 0.0;
+    if (pk > 0.0) {
+      penalty_[ms + static_cast<Eigen::Index>(k)] = pk;
+      penalty_rows_.push_back(ms + static_cast<int>(k));
+    }
+  }
+  if (!penalty_rows_.empty() && s_.has_massless_nodes() && kind_ != GradientKind::Exact)
+    throw std::invalid_argument(
+        "a penalty contact in a system with massless nodes (a modified mass): not supported");
 
   if (!s_.has_massless_nodes() || kind_ == GradientKind::Exact) return;
   // Massless mode: which rows and terms are which, and the mass groups.
@@ -145,8 +157,44 @@ void StepProblem::residual(const Vec& x, Vec& f) {
   f.tail(m_).head(ms) = kappa_ * phi_.head(ms);
   f.tail(m_).tail(m_ - ms) =
       kappa_ * (phi0_.tail(m_ - ms) + increment_.tail(m_ - ms) - targets_.tail(m_ - ms));
+  if (!penalty_rows_.empty()) {
+    Vec d, slope;
+    penalty_laws(q1, d, slope);
+    for (int l : penalty_rows_) f[n_ + l] = kappa_ * (lambda[l] / penalty_[l] - d[l]);
+  }
   for (const auto& p : s_.prescribed())
     f[p.dof] = kappa_ * (q1[p.dof] - (p.position ? p.position(t1_) : q0_[p.dof]));
+}
+
+void StepProblem::penalty_laws(const Vec& q1, Vec& d, Vec& slope) const {
+  // h(x) = 1/2 min(x, 0)^2, h'(x) = min(x, 0).
+  d = Vec::Zero(m_);
+  slope = Vec::Zero(m_);
+  Vec local;
+  for (int l : penalty_rows_) {
+    if (kind_ == GradientKind::Discrete) {
+      const double a = phi0_[l], b = phi0_[l] + increment_[l];
+      if (a >= 0.0 && b >= 0.0) continue;
+      if (a <= 0.0 && b <= 0.0) {  // h quadratic on [a, b]: the quotient is h' at the mean
+        d[l] = 0.5 * (a + b);
+        slope[l] = 0.5;
+      } else {  // across the kink, b - a is at least |a| and |b|
+        const double hb = 0.5 * std::min(b, 0.0) * std::min(b, 0.0);
+        const double ha = 0.5 * std::min(a, 0.0) * std::min(a, 0.0);
+        d[l] = (hb - ha) / (b - a);
+        slope[l] = (std::min(b, 0.0) - d[l]) / (b - a);
+      }
+    } else if (kind_ == GradientKind::Midpoint) {
+      const Term& c = assembler_.constraint(l);
+      gather(c, Vec(0.5 * (q0_ + q1)), local);
+      const double phi = c.value(local, 0.5 * (t0_ + t1_));
+      d[l] = std::min(phi, 0.0);
+      slope[l] = phi < 0.0 ? 0.5 : 0.0;  // d Phi(q_mid)/d q1 ~ 1/2 grad Phi(q1)
+    } else {
+      d[l] = std::min(phi_[l], 0.0);
+      slope[l] = phi_[l] < 0.0 ? 1.0 : 0.0;
+    }
+  }
 }
 
 void StepProblem::jacobian(const Vec& x, SparseMatrix& j) {
@@ -165,6 +213,23 @@ void StepProblem::jacobian(const Vec& x, SparseMatrix& j) {
     if (!s_.loads().empty())
       s_.add_load_forces(load_point(q1), load_time(), force_, &trip_,
                          kind_ == GradientKind::Exact ? -1.0 : -0.5);
+  }
+  if (!penalty_rows_.empty()) {
+    // Penalty rows: kappa (lambda / k - D(Phi_1)); the rows assembled above
+    // are dPhi_1/dq.
+    Vec d, slope;
+    assembler_.constraint_values(q1, t1_, phi_);
+    if (kind_ == GradientKind::Discrete) {
+      // Phi_1 as the residual has it: Phi_0 + G . (q1 - q0), equal to Phi(q1)
+      // up to round-off.
+      increment_ = phi_ - phi0_;
+    }
+    penalty_laws(q1, d, slope);
+    for (auto& e : trip_)
+      if (e.row() >= n_ && penalty_[e.row() - n_] > 0.0)
+        e = Eigen::Triplet<double, long>(e.row(), e.col(), -slope[e.row() - n_] * e.value());
+    // d/dx of kappa (kappa x / k) is kappa^2 / k; the loop below adds one kappa.
+    for (int l : penalty_rows_) trip_.emplace_back(n_ + l, n_ + l, kappa_ / penalty_[l]);
   }
   for (auto& e : trip_)  // G columns and Phi rows carry kappa (see the constructor)
     if (e.row() >= n_ || e.col() >= n_)
@@ -418,7 +483,11 @@ double StepProblem::energy_residual(const Vec& x, const Vec& f) const {
     if (m[i] > 0.0) error += dt_ * dt_ / (2.0 * m[i]) * f[i] * force;
     scale += std::abs(force * dq[i]);
   }
-  error -= f.tail(m_).dot(x.tail(m_));  // (Phi - target) lambda
+  // (Phi - target) lambda on exact rows; on penalty rows the force's
+  // departure from its law times the gap's increment, (lambda - k D) dPhi.
+  for (int l = 0; l < m_; ++l)
+    error -= penalty_[l] > 0.0 ? f[n_ + l] / kappa_ * penalty_[l] * increment_[l]
+                               : f[n_ + l] * x[n_ + l];
   return scale > 0.0 ? std::abs(error) / scale : 0.0;
 }
 

@@ -51,6 +51,17 @@
 // discrete gradient against the mean of the two end equilibria), at an
 // entry O(dt) (a massless node's contact force starts from zero), and the
 // remainder smaller still; e's dependence on q is left out of the Jacobian.
+//
+// Penalized contact candidates (a penalty contact, core/unilateral.hpp) have
+// the row of their force law instead of a gap condition,
+//
+//   R_l = kappa (lambda_l / k_l - D_l),   lambda_l = k_l D_l,
+//
+// with D the derivative of h(Phi) = 1/2 min(Phi, 0)^2 that fits the scheme:
+// em its discrete derivative (h(Phi_1) - h(Phi_0)) / (Phi_1 - Phi_0), Phi_1 =
+// Phi_0 + G . (q_1 - q_0), so that lambda_l G . (q_1 - q_0) = k_l (h(Phi_1) -
+// h(Phi_0)) exactly and the penalty energy joins the energy balance; the
+// midpoint rule h'(Phi(q_mid)); statics h'(Phi(q_1)).
 #pragma once
 
 #include <Eigen/Dense>
@@ -88,6 +99,8 @@ class StepProblem final : public NewtonProblem {
 
  private:
   bool massless_mode() const { return !groups_.empty(); }
+  // The penalty rows (see the header): D_l and dD_l/dPhi_1 at q1.
+  void penalty_laws(const Vec& q1, Vec& d, Vec& slope) const;
   void add_massless_forces(const Vec& q1, const Vec& lambda, Vec& force, Vec* load, Triplets* jac);
   // The local transfer of m_A (see the header) at midpoint positions qm.
   struct Transfer {
@@ -120,6 +133,8 @@ class StepProblem final : public NewtonProblem {
   Vec lambda0_;                // multipliers at the start (0 for a contact not active then)
   double contact_work_ = 0.0;  // sum over algebraic contacts of lambda_bar (Phi_1 - Phi_0)
   double kappa_ = 1.0;
+  Vec penalty_;  // k_l of each row, 0 for an exact constraint
+  std::vector<int> penalty_rows_;
   double kinetic0_ = 0.0;
   Vec phi_, force_, load_;
   Triplets trip_;

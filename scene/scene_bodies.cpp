@@ -238,7 +238,7 @@ TimeFunction Builder::time_function(const Fields& f, std::string_view k) const {
 }
 
 void Builder::parse_contact(const Fields& f) {
-  f.only({"name", "slave", "master", "search_margin", "modified_mass"});
+  f.only({"name", "slave", "master", "search_margin", "modified_mass", "penalty"});
   const std::string slave =
       set_ref(f, "slave", Model::SetKind::Edges, "the slave surface, \"body.set\"");
   const std::string master =
@@ -251,6 +251,11 @@ void Builder::parse_contact(const Fields& f) {
   ContactOptions options;
   options.search_margin = f.optional_non_negative("search_margin").value_or(options.search_margin);
   options.modified_mass = f.boolean("modified_mass", false);
+  options.penalty = f.optional_positive("penalty").value_or(0.0);
+  if (options.penalty > 0.0 && options.modified_mass)
+    f.fail_key("penalty",
+               "a penalty contact keeps the nodes' mass: give either penalty or "
+               "modified_mass = true, not both");
   model_call(f, [&] { add_mortar_contact(model(), slave, master, name, options); });
 }
 

@@ -96,6 +96,10 @@ struct Treatment {
   bool lumped_mass = false;  // the standard mass lumped (row sums) instead of consistent
   double rho_inf = 1.0;      // galpha
   double ida_tol = 1e-10;    // ida: rtol = atol
+  // > 0: a penalty contact, epsilon = penalty * E / h with h = L / nx the
+  // element length (the scaling of Doyen, Ern & Piperno: the penetration,
+  // p h / (penalty E), falls with the mesh).
+  double penalty = 0.0;
 
   std::string label() const {
     std::string s = scheme;
@@ -110,8 +114,13 @@ struct Treatment {
       s += b;
     }
     s += modified_mass ? ", modified mass" : lumped_mass ? ", lumped mass" : ", standard mass";
-    if (!modified_mass && (scheme == "em" || scheme == "midpoint"))
+    if (penalty > 0.0) {
+      char b[48];
+      std::snprintf(b, sizeof b, ", penalty %g E/h", penalty);
+      s += b;
+    } else if (!modified_mass && (scheme == "em" || scheme == "midpoint")) {
       s += ", " + impact_treatment_name(impact);
+    }
     return s;
   }
 };
@@ -134,6 +143,7 @@ inline std::unique_ptr<Model> bar_wall_model(const BarWall& b, const Treatment& 
   model->add_body("bar", rectangle_mesh({b.gap(), 0.0}, b.length, b.height, b.nx, b.ny), mat, bar);
   ContactOptions options;
   options.modified_mass = t.modified_mass;
+  options.penalty = t.penalty * b.young * b.nx / b.length;
   add_mortar_contact(*model, "bar.left", "wall.right", "impact", options);
   return model;
 }
@@ -190,6 +200,8 @@ struct BarWallErrors {
   // scheme reports it (ida: by quadrature over its internal steps; NaN when
   // not reported). The wall is fixed, so this is the momentum error.
   double momentum_balance = NAN;
+  // Deepest penetration over U (a penalty contact's: pressure / epsilon).
+  double penetration = 0.0;
   // The bar's nodal x displacements at the end, in mesh order (for
   // comparisons of runs on one mesh: bar_wall_difference).
   Vec u_end;
@@ -389,6 +401,7 @@ inline BarWallErrors run_bar_wall(const BarWall& b, const Treatment& t, double d
   out.energy = s.energy_rel_error_max;
   if (s.linear_momentum_balance_error_max)
     out.momentum_balance = *s.linear_momentum_balance_error_max / (b.mass() * b.speed);
+  if (s.contact) out.penetration = s.contact->penetration_max / b.displacement_scale();
   out.steps = s.steps;
   out.newton = s.newton_iterations;
   out.events = s.contact ? s.contact->contact_events : 0;

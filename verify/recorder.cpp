@@ -130,12 +130,14 @@ void Recorder::measure_contact(const State& state, Sample& s) {
   std::vector<char> active(static_cast<std::size_t>(system_.n_unilateral()), 0);
   for (int id : state.active) {
     active[static_cast<std::size_t>(id)] = 1;
+    // A penalty contact's penetration is its force law, not a violation.
+    if (system_.unilateral_penalty(id) > 0.0) continue;
     // +infinity: the candidate's function is gone (nothing opposite); not a violation.
     const double phi = system_.unilateral_gap(id, state.q);
     if (std::isfinite(phi) || std::isnan(phi)) keep_max(s.gap_violation, std::abs(phi));
   }
   for (int id = 0; id < system_.n_unilateral(); ++id) {
-    if (active[static_cast<std::size_t>(id)]) continue;
+    if (active[static_cast<std::size_t>(id)] && !(system_.unilateral_penalty(id) > 0.0)) continue;
     const double phi = system_.unilateral_gap(id, state.q);
     if (std::isnan(phi) || phi < 0) keep_max(s.penetration, -phi);
   }

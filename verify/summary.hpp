@@ -61,7 +61,7 @@ struct ContactFigures {
   std::optional<double> first, last;  // the contact window; empty: no contact
   int active_contacts_max = 0;
   double gap_violation_max = 0.0;  // max |Phi| over active candidates
-  double penetration_max = 0.0;    // max(0, -Phi) over inactive candidates
+  double penetration_max = 0.0;    // max(0, -Phi) over inactive and penalized candidates
   long contact_events = 0;
 };
 
