@@ -303,6 +303,7 @@ void StepProblem::add_massless_forces(const Vec& q1, const Vec& lambda, Vec& for
     gather(c, q1, l1);
     assembler_.add_term(c, kind, q0_, q1, t0_, t1_, lambda[l], force, jac, 1.0, nullptr);
     Vec g = assembler_.last_gradient();
+    const Vec g_step = g;  // the step's gradient (g becomes the row's below)
     phi_[l] = c.value(l1, t1_);
     increment_[l] = kind == GradientKind::Discrete && !c.depends_on_time()
                         ? g.dot(l1 - l0)
@@ -322,6 +323,14 @@ void StepProblem::add_massless_forces(const Vec& q1, const Vec& lambda, Vec& for
     if (!alg) continue;
     // lambda_bar = (lambda_n + lambda_{n+1}) / 2 times the discrete gradient.
     const double lambda_bar = 0.5 * (lambda0_[l] + lambda[l]);
+    // What a support takes (prescribed rows; their residual is q - g, so
+    // this is only the reported support impulse) is the reaction to what
+    // the massive side receives, lambda_bar G, not lambda_{n+1} G: with
+    // lambda_{n+1} the bar against a wall showed a momentum balance error
+    // of dt lambda / 2 (telescoped), dt c / (2L) of m v0.
+    for (std::size_t i = 0; i < c.dofs().size(); ++i)
+      if (s_.is_prescribed()[static_cast<std::size_t>(c.dofs()[i])])
+        force[c.dofs()[i]] += (lambda_bar - lambda[l]) * g_step[static_cast<Eigen::Index>(i)];
     local.clear();
     assembler_.add_term(c, kind_, q0_, q1, t0_, t1_, lambda_bar, imbalance, jac ? &local : nullptr,
                         1.0, &massless_);
