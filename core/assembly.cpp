@@ -45,7 +45,13 @@ void Assembler::add_constraint_forces(GradientKind kind, const Vec& q0, const Ve
   if (increment) increment->resize(n_constraints());
   for (int l = 0; l < n_constraints(); ++l) {
     const Term& c = constraint(l);
-    local(c, kind, q0, q1, t0, t1, jac ? &jac_ : nullptr);
+    // A multiplier of 0 (a node just entered, a penalty node not in
+    // contact) weights the gradient's Jacobian by 0: it is not evaluated,
+    // only its pattern kept (zeros), so that the matrix's pattern and the
+    // factorization's analysis stay those of the step.
+    const bool weighted = jac && lambda[l] != 0.0;
+    local(c, kind, q0, q1, t0, t1, weighted ? &jac_ : nullptr);
+    if (jac && !weighted) jac_.setZero(c.n_local(), c.n_local());
     const auto& dofs = c.dofs();
     for (std::size_t i = 0; i < dofs.size(); ++i)
       f[dofs[i]] += lambda[l] * grad_[static_cast<Eigen::Index>(i)];

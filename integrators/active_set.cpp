@@ -84,9 +84,22 @@ bool ActiveSet::penalized(int id) const {
 }
 
 void ActiveSet::drop_unloaded_penalized(State& s) const {
-  for (std::size_t k = s.active.size(); k-- > 0;)
-    if (penalized(s.active[k]) && s.lambda[n_static_ + static_cast<Eigen::Index>(k)] == 0.0)
-      release_candidate(s, k);
+  Vec local;
+  for (std::size_t k = s.active.size(); k-- > 0;) {
+    const int id = s.active[k];
+    if (!penalized(id)) continue;
+    // In contact at the end: its function (not gap(), which is +infinity
+    // where little of the master lies opposite, though the penalty acts
+    // there too) is negative. A multiplier that Newton left at round-off
+    // instead of 0 does not count.
+    const Term* term = system_.unilateral_term(id);
+    bool penetrating = false;
+    if (term) {
+      gather(*term, s.q, local);
+      penetrating = term->value(local, s.t) < 0.0;
+    }
+    if (!penetrating) release_candidate(s, k);
+  }
 }
 
 std::vector<std::size_t> ActiveSet::tensile(const State& s, const Vec& lambda,

@@ -75,8 +75,9 @@ class ActiveSet {
 
   /// Whether candidate `id` is penalized (UnilateralConstraints::penalty > 0).
   bool penalized(int id) const;
-  /// After an accepted (sub-)step: penalized nodes that carry no force
-  /// leave, so that the active set is the nodes in contact, as for exact ones.
+  /// After an accepted (sub-)step: penalized nodes that do not penetrate at
+  /// its end leave, so that the active set is the nodes in contact, as for
+  /// exact ones (the next step's begin() takes them in again).
   void drop_unloaded_penalized(State& s) const;
 
   /// Active nodes (positions in s.active) whose multiplier in `lambda`
