@@ -531,13 +531,16 @@ void bind_model(py::module_& m) {
       .def(
           "add_contact",
           [](Model& x, const std::string& slave, const std::string& master, const std::string& name,
-             double search_margin) {
+             double search_margin, bool modified_mass) {
             ContactOptions o;
             o.search_margin = search_margin;
+            o.modified_mass = modified_mass;
             add_mortar_contact(x, slave, master, name, o);
           },
           py::arg("slave"), py::arg("master"), py::arg("name") = "", py::arg("search_margin") = 1.0,
-          "Frictionless mortar contact between two edge sets 'body.set'.")
+          py::arg("modified_mass") = false,
+          "Frictionless mortar contact between two edge sets 'body.set' (modified_mass: both "
+          "surfaces massless, as the scene key contacts[].modified_mass).")
       .def(
           "fix",
           [](Model& x, const std::string& nodes, const std::string& components) {

@@ -58,3 +58,18 @@ def test_a_run_that_fails_numerically_is_a_result_not_an_exception():
     result = emdae.run(scene, scheme="midpoint")
     assert result.end == "failed"
     assert result.status != "ok"
+
+
+def test_ctrl_c_ends_the_run_as_a_keyboard_interrupt_and_keeps_the_output(tmp_path):
+    import os
+    import signal
+
+    def progress(p):
+        if p["step"] == 30:
+            os.kill(os.getpid(), signal.SIGINT)
+
+    scene = emdae.load(EXAMPLES / "double_pendulum.toml", PENDULUM_SHORT)
+    with pytest.raises(KeyboardInterrupt):
+        emdae.run(scene, out_dir=tmp_path, progress=progress)
+    summary = read_summary(tmp_path / "summary.json")
+    assert summary["status"].startswith("interrupted at t = 0.3")

@@ -77,3 +77,22 @@ def test_loads_dirichlet_and_time_functions():
     # Supported and loaded: the energy balance with the work of the load.
     assert result.summary["energy_balance_rel_error_max"] < 1e-9
     assert result.positions("beam")[-1, :, 1].min() < -1e-3  # it bends down
+
+
+def test_modified_mass_contact_built_in_python_equals_the_scene_key():
+    svk = emdae.material("svk", 100.0, 0.1, 0.001)
+    model = emdae.Model(2)
+    model.add_body("left", emdae.ring_mesh([-110.0, 0.0], 47.0, 50.0, 32, 1), svk,
+                   velocity=[10.0, 0.0])
+    model.add_body("right", emdae.ring_mesh([110.0, 20.0], 47.0, 50.0, 32, 1), svk,
+                   velocity=[-10.0, 0.0])
+    model.add_contact("left.outer", "right.outer", name="rings", modified_mass=True)
+    settings = emdae.RunSettings()
+    settings.time.dt = 0.05
+    settings.time.t_end = 6.5
+    settings.schemes.newton.max_iterations = 25
+    built = emdae.run(model, settings)
+    overrides = dict(RING_SHORT, **{"time.t_end": 6.5, "contacts[0].modified_mass": True})
+    scene = emdae.run(emdae.load(EXAMPLES / "ring_impact.toml", overrides))
+    assert np.array_equal(built.history_table, scene.history_table)
+    assert built.history["active_contacts"].max() > 0
