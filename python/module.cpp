@@ -292,6 +292,8 @@ void check_settings(const Model& model, const RunSettings& s) {
       throw InputError("time.t_end: must be at least time.dt, received " +
                        std::to_string(s.time.t_end));
   }
+  if (s.static_only && !s.statics.enabled)
+    throw InputError("static_only: a static analysis needs statics.enabled");
   if (s.output.every < 1)
     throw InputError("output.every: must be at least 1, received " +
                      std::to_string(s.output.every));
@@ -658,6 +660,21 @@ void bind_settings(py::module_& m) {
       .def_readwrite("gap_violation", &Tolerances::gap_violation)
       .def_readwrite("penetration", &Tolerances::penetration)
       .def_readwrite("contact_pressure_spread", &Tolerances::contact_pressure_spread);
+  py::class_<StaticSettings>(m, "StaticSettings")
+      .def(py::init<>())
+      .def_readwrite("pseudo_dt", &StaticSettings::pseudo_dt)
+      .def_readwrite("max_steps", &StaticSettings::max_steps)
+      .def_readwrite("tolerance", &StaticSettings::tolerance)
+      .def_readwrite("newton", &StaticSettings::newton)
+      .def_readwrite("increments", &StaticSettings::increments)
+      .def_readwrite("load_time", &StaticSettings::load_time);
+  py::class_<EquilibriumSettings>(m, "EquilibriumSettings",
+                                  "[statics]: an equilibrium before the dynamics, or the whole "
+                                  "run when RunSettings.static_only.")
+      .def(py::init<>())
+      .def_readwrite("enabled", &EquilibriumSettings::enabled)
+      .def_readwrite("settings", &EquilibriumSettings::settings)
+      .def_readwrite("hold_rotation", &EquilibriumSettings::hold_rotation);
   py::class_<RunSettings>(m, "RunSettings",
                           "The settings of a run (run/run.hpp): scheme and the settings of "
                           "every scheme, time, output, tolerances.")
@@ -668,7 +685,8 @@ void bind_settings(py::module_& m) {
       .def_readwrite("scheme", &RunSettings::scheme)
       .def_readwrite("schemes", &RunSettings::schemes)
       .def_readwrite("time", &RunSettings::time)
-      .def_readonly("static_only", &RunSettings::static_only)
+      .def_readwrite("static_only", &RunSettings::static_only)
+      .def_readwrite("statics", &RunSettings::statics)
       .def_readwrite("output", &RunSettings::output)
       .def_readwrite("tolerances", &RunSettings::tolerances);
 }

@@ -38,15 +38,16 @@ def main():
     for scheme in ["em", "midpoint", "galpha", "ida"]:
         start = time.perf_counter()
         result = emdae.run(scene, scheme=scheme, keep_states=False)
-        seconds = time.perf_counter() - start
+        wall = time.perf_counter() - start
+        cpu = result.summary["cpu_seconds"]  # the integration's CPU time
         h = result.history
         # The relative energy error of each row; round-off shows as 1e-16.
-        ax.semilogy(h["t"], h["energy_error"] + 1e-16, label=f"{scheme} ({seconds:.1f} s)")
+        ax.semilogy(h["t"], h["energy_error"] + 1e-16, label=f"{scheme} ({cpu:.1f} s CPU)")
         print(f"{scheme:<9} {result.end:<9} energy error max "
-              f"{result.summary['energy_rel_error_max']:.3e}  {seconds:.1f} s")
+              f"{result.summary['energy_rel_error_max']:.3e}  CPU {cpu:.1f} s, wall {wall:.1f} s")
     contact = h["active_contacts"] > 0
     if contact.any():
-        ax.axvspan(h["t"][contact][0], h["t"][contact][-1], color="0.9", label="contact (ida)")
+        ax.axvspan(h["t"][contact][0], h["t"][contact][-1], color="0.9", label="contact (ida's run)")
     ax.set_xlabel("t")
     ax.set_ylabel("|H - H0| / E")
     ax.set_title("two-ring impact (paper 5.2): energy error per scheme")
