@@ -169,8 +169,9 @@ struct Recording {
 struct PyResult {
   RunResult result;
   Recording rec;
-  std::string out_dir;       // "" when nothing was written
-  bool has_contact = false;  // the model has contact pairs
+  std::string out_dir;                // "" when nothing was written
+  bool has_contact = false;           // the model has contact pairs
+  std::vector<std::string> warnings;  // what cost part of the output (RunObserver::warned)
   // Where bodies and particles are in the node numbering.
   std::vector<std::pair<std::string, std::pair<int, int>>> bodies;  // name, (offset, count)
   std::vector<std::pair<std::string, int>> particles;               // name, node
@@ -251,7 +252,12 @@ class PyObserver final : public RunObserver {
       py::dict p;
       p["step"] = sample.step;
       p["t"] = sample.t;
-      p["t_end"] = settings_.static_only ? 1.0 : t_end_;
+      // A static analysis: its load increments, the last at load_time.
+      p["t_end"] =
+          settings_.static_only ? settings_.statics.settings.load_time.value_or(0.0) : t_end_;
+      p["steps"] = settings_.static_only
+                       ? static_cast<long>(settings_.statics.settings.increments)
+                       : static_cast<long>(std::ceil(t_end_ / settings_.time.dt - 1e-9));
       p["energy_error"] = sample.energy_error;
       p["newton_iterations"] = sample.newton_iterations;
       p["active_contacts"] = sample.active_contacts;
@@ -333,6 +339,7 @@ std::shared_ptr<PyResult> run_model(Model& model, RunSettings settings,
     observer.finish();
   }
   out->out_dir = settings.out_dir;
+  out->warnings = observer.warnings();
   if (observer.error()) {
     // The run stopped for it and kept its output; the error is the caller's.
     observer.error()->restore();
@@ -730,6 +737,7 @@ void bind_result(py::module_& m) {
                                return py::str(r.out_dir);
                              })
       .def_property_readonly("columns", [](const PyResult& r) { return r.rec.columns; })
+      .def_property_readonly("warnings", [](const PyResult& r) { return r.warnings; })
       .def_property_readonly(
           "history_table",
           [](py::object self) {

@@ -131,8 +131,9 @@ def run(what, settings=None, *, scheme=None, dt=None, t_end=None, out_dir=None,
     Model); scheme, dt, t_end: shorthands that change a copy of it.
     out_dir: where history.csv, summary.json, report.html, contact.csv and
     the VTU fields go; None writes nothing.
-    progress(p): called at every history row with a dict (step, t, t_end,
-    energy_error, newton_iterations, active_contacts); returning False ends
+    progress(p): called at every history row with a dict (step, steps, t,
+    t_end, energy_error, newton_iterations, active_contacts; a static
+    analysis: its increments, t_end its load_time); returning False ends
     the run (Result.end == "interrupted", what was written is kept); an
     exception it raises ends the run and is raised again once the run's
     output is written. Ctrl-C ends it the same way (KeyboardInterrupt).

@@ -12,7 +12,7 @@ def test_returning_false_ends_the_run_and_keeps_what_it_wrote(tmp_path):
 
     def progress(p):
         seen.append(p["step"])
-        assert p["t_end"] == 2.0
+        assert p["t_end"] == 2.0 and p["steps"] == 200
         return p["step"] < 50
 
     scene = emdae.load(EXAMPLES / "double_pendulum.toml", PENDULUM_SHORT)
