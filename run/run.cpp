@@ -320,6 +320,7 @@ RunResult run(Model& model, const RunSettings& settings, RunObserver* watcher) {
   result.summary = summarize(info, system, recorder, settings.tolerances);
   result.fields = fields.active();
   result.contact_table = writes && contact.has_value();
+  if (contact) result.contact = *contact;
   if (!writes) return result;
   if (contact) write_contact_table(path("contact.csv"), *contact);
   write_summary(path("summary.json"), result.summary);

@@ -28,6 +28,7 @@
 #include "integrators/driver.hpp"
 #include "integrators/schemes.hpp"
 #include "integrators/statics.hpp"
+#include "verify/contact_pressure.hpp"
 #include "verify/recorder.hpp"
 #include "verify/summary.hpp"
 
@@ -99,6 +100,9 @@ struct RunResult {
   Summary summary;                             // summary.status says how it ended
   State state;                                 // the last state reached
   bool fields = false, contact_table = false;  // fields.pvd, contact.csv written
+  /// The rows of contact.csv (whether or not it was written); empty when the
+  /// model has no contact or the pressure could not be computed.
+  std::vector<ContactNode> contact;
   bool finished() const { return end == End::Finished; }
 };
 

@@ -9,6 +9,7 @@ packages=(
   libtomlplusplus-dev libcli11-dev libfmt-dev nlohmann-json3-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   python3 python3-meshio python3-numpy gnuplot-nox
+  python3-dev pybind11-dev python3-pytest python3-matplotlib
 )
 if [[ "${EMDAE_BROWSER_TESTS:-1}" == 1 ]]; then packages+=(chromium); fi
 

@@ -38,25 +38,33 @@ HistoryWriter::~HistoryWriter() {
   if (file_) std::fclose(file_);
 }
 
+void history_row(const Sample& s, int dim, bool external_work, bool contact,
+                 std::vector<double>& row) {
+  const Quantities& q = s.quantities;
+  row.clear();
+  row.insert(row.end(), {s.t, s.dt, q.kinetic, q.potential, q.total()});
+  if (external_work) row.push_back(s.external_work);
+  for (int d = 0; d < q.linear_momentum.size(); ++d) row.push_back(q.linear_momentum[d]);
+  if (dim == 2) {
+    row.push_back(q.angular_momentum[0]);
+  } else {
+    row.push_back(q.angular_momentum.norm());
+    for (int d = 0; d < 3; ++d) row.push_back(q.angular_momentum[d]);
+  }
+  row.insert(row.end(),
+             {q.phi_max, static_cast<double>(s.newton_iterations), static_cast<double>(s.cutbacks),
+              s.energy_error, s.linear_momentum_error, s.angular_momentum_error});
+  if (contact)
+    row.insert(row.end(), {static_cast<double>(s.active_contacts),
+                           static_cast<double>(s.contact_events), s.gap_violation, s.penetration});
+}
+
 void HistoryWriter::write(const Sample& s) {
   if (!file_) throw std::logic_error("HistoryWriter::write after close");
-  const Quantities& q = s.quantities;
-  std::fprintf(file_, "%.17g,%.17g,%.17g,%.17g,%.17g", s.t, s.dt, q.kinetic, q.potential,
-               q.total());
-  if (external_work_) std::fprintf(file_, ",%.17g", s.external_work);
-  for (int d = 0; d < q.linear_momentum.size(); ++d)
-    std::fprintf(file_, ",%.17g", q.linear_momentum[d]);
-  if (dim_ == 2) {
-    std::fprintf(file_, ",%.17g", q.angular_momentum[0]);
-  } else {
-    std::fprintf(file_, ",%.17g", q.angular_momentum.norm());
-    for (int d = 0; d < 3; ++d) std::fprintf(file_, ",%.17g", q.angular_momentum[d]);
-  }
-  std::fprintf(file_, ",%.17g,%d,%d,%.17g,%.17g,%.17g", q.phi_max, s.newton_iterations, s.cutbacks,
-               s.energy_error, s.linear_momentum_error, s.angular_momentum_error);
-  if (contact_)
-    std::fprintf(file_, ",%d,%d,%.17g,%.17g", s.active_contacts, s.contact_events, s.gap_violation,
-                 s.penetration);
+  history_row(s, dim_, external_work_, contact_, row_);
+  // %.17g: every double read back exactly; the counts print as integers.
+  for (std::size_t i = 0; i < row_.size(); ++i)
+    std::fprintf(file_, i ? ",%.17g" : "%.17g", row_[i]);
   std::fputc('\n', file_);
   // Flushed per row: a killed run keeps its history up to the last step.
   if (std::fflush(file_) != 0)

@@ -30,6 +30,12 @@ namespace emdae {
 /// The header of history.csv for a system of dimension `dim`.
 std::vector<std::string> history_columns(int dim, bool external_work = false, bool contact = false);
 
+/// The values of one history row, in the order of history_columns() (the
+/// counts as exact doubles): what HistoryWriter writes and what the Python
+/// module keeps in memory, from one definition.
+void history_row(const Sample& sample, int dim, bool external_work, bool contact,
+                 std::vector<double>& row);
+
 class HistoryWriter {
  public:
   /// Creates (truncates) `path` and writes the header; throws
@@ -54,6 +60,7 @@ class HistoryWriter {
   bool contact_;
   std::FILE* file_ = nullptr;
   long rows_ = 0;
+  std::vector<double> row_;
 };
 
 }  // namespace emdae
