@@ -540,16 +540,18 @@ void bind_model(py::module_& m) {
       .def(
           "add_contact",
           [](Model& x, const std::string& slave, const std::string& master, const std::string& name,
-             double search_margin, bool modified_mass) {
+             double search_margin, bool modified_mass, double penalty) {
             ContactOptions o;
             o.search_margin = search_margin;
             o.modified_mass = modified_mass;
+            o.penalty = penalty;
             add_mortar_contact(x, slave, master, name, o);
           },
           py::arg("slave"), py::arg("master"), py::arg("name") = "", py::arg("search_margin") = 1.0,
-          py::arg("modified_mass") = false,
+          py::arg("modified_mass") = false, py::arg("penalty") = 0.0,
           "Frictionless mortar contact between two edge sets 'body.set' (modified_mass: both "
-          "surfaces massless, as the scene key contacts[].modified_mass).")
+          "surfaces massless, as the scene key contacts[].modified_mass; penalty: epsilon > 0 "
+          "for a penalty contact, as contacts[].penalty).")
       .def(
           "fix",
           [](Model& x, const std::string& nodes, const std::string& components) {

@@ -99,6 +99,30 @@ def test_modified_mass_contact_built_in_python_equals_the_scene_key():
     assert built.history["active_contacts"].max() > 0
 
 
+def test_penalty_contact_built_in_python_equals_the_scene_key():
+    svk = emdae.material("svk", 100.0, 0.1, 0.001)
+    model = emdae.Model(2)
+    model.add_body("left", emdae.ring_mesh([-110.0, 0.0], 47.0, 50.0, 32, 1), svk,
+                   velocity=[10.0, 0.0])
+    model.add_body("right", emdae.ring_mesh([110.0, 20.0], 47.0, 50.0, 32, 1), svk,
+                   velocity=[-10.0, 0.0])
+    model.add_contact("left.outer", "right.outer", name="rings", penalty=10.0)
+    settings = emdae.RunSettings()
+    settings.time.dt = 0.05
+    settings.time.t_end = 6.5
+    settings.schemes.newton.max_iterations = 25
+    built = emdae.run(model, settings)
+    overrides = dict(RING_SHORT, **{"time.t_end": 6.5, "contacts[0].penalty": 10.0})
+    scene = emdae.run(emdae.load(EXAMPLES / "ring_impact.toml", overrides))
+    assert np.array_equal(built.history_table, scene.history_table)
+    assert built.history["active_contacts"].max() > 0
+    # The penalty energy is in the total: em keeps it through the impact.
+    assert built.summary["energy_rel_error_max"] < 1e-10
+    with pytest.raises(emdae.ModelError):
+        model.add_contact("left.outer", "right.outer", name="both", penalty=10.0,
+                          modified_mass=True)
+
+
 def test_static_patch_test_built_in_python_equals_its_scene():
     model = emdae.Model(2)
     svk = emdae.material("svk", 100.0, 0.3, 1.0)
