@@ -12,6 +12,7 @@
 #include <stdexcept>
 
 #include "verify/page.hpp"
+#include "verify/snapshots.hpp"
 
 namespace emdae {
 
@@ -132,7 +133,71 @@ RunCurves derive_curves(const Table& h) {
   c.newton = per_step("Newton iterations", col("newton_iterations"));
   const auto* cut = h.column("cutbacks");
   c.cutbacks = per_step("cut-backs", cut ? *cut : zeros_like(n));
+  c.dt = per_step("step size", col("dt"));
+  c.cutback_steps = Series{"step after a cut-back", {}, {}};
+  c.cutback_steps.points_only = true;
+  c.cutback_steps.marker = 9;  // a downward triangle: the step was cut
+  for (std::size_t i = 0; i < c.cutbacks.t.size() && i < c.dt.y.size(); ++i)
+    if (c.cutbacks.y[i] > 0) {
+      c.cutback_steps.t.push_back(c.cutbacks.t[i]);
+      c.cutback_steps.y.push_back(c.dt.y[i]);
+    }
   return c;
+}
+
+std::vector<Band> history_bands(const Table& h) {
+  std::vector<Band> bands;
+  const auto* t = h.column("t");
+  if (!t || t->empty()) return bands;
+  // Load intervals: rows over which the loads did work.
+  if (const auto* w = h.column("external_work")) {
+    for (std::size_t i = 1; i < t->size(); ++i) {
+      if ((*w)[i] == (*w)[i - 1]) continue;
+      if (!bands.empty() && bands.back().kind == "load" && bands.back().t1 == (*t)[i - 1])
+        bands.back().t1 = (*t)[i];
+      else
+        bands.push_back({(*t)[i - 1], (*t)[i], "load"});
+    }
+  }
+  // Contact windows: from the first to the last row of each run of rows
+  // with active contact nodes (the recorder's contact_window).
+  // The active set of an impact can empty for a few steps while the bodies
+  // are still together: a gap no longer than the window so far (or three
+  // steps) continues it (the same rule as the drawings of the bodies).
+  if (const auto* a = h.column("active_contacts")) {
+    bool open = false;
+    Band* window = nullptr;
+    for (std::size_t i = 0; i < t->size(); ++i) {
+      if ((*a)[i] > 0) {
+        if (!open) {
+          const double step = i > 0 ? (*t)[i] - (*t)[i - 1] : 0.0;
+          if (!window || (*t)[i] - window->t1 > std::max(window->t1 - window->t0, 3.0 * step)) {
+            bands.push_back({(*t)[i], (*t)[i], "contact"});
+            window = &bands.back();
+          }
+        }
+        open = true;
+        window->t1 = (*t)[i];
+      } else {
+        open = false;
+      }
+    }
+  }
+  return bands;
+}
+
+std::string bands_caption(const std::vector<Band>& bands) {
+  const auto has = [&bands](const char* kind) {
+    return std::any_of(bands.begin(), bands.end(),
+                       [kind](const Band& b) { return b.kind == kind; });
+  };
+  std::string out;
+  if (has("contact")) out += " Shaded orange: contact windows (active contact nodes).";
+  if (has("load"))
+    out +=
+        " Shaded blue: load intervals (the loads do work); the energy check holds over "
+        "the rest.";
+  return out;
 }
 // --- HTML -----------------------------------------------------------------------------------
 
@@ -165,6 +230,16 @@ table.compare td { max-width: 320px; }
 .mark.pass { color: var(--pass); }
 .mark.fail { color: var(--fail); }
 .mark.skipped { color: var(--muted); font-weight: 400; }
+.mark.warn { color: #b26a00; }
+ul.verdicts { list-style: none; padding: 0; margin: 6px 0; }
+ul.verdicts li { padding: 3px 0; }
+.snapshots { display: grid; grid-template-columns: repeat(auto-fill, minmax(300px, 1fr));
+             gap: 12px 18px; }
+.snapshots figure { border: 1px solid var(--line); border-radius: 4px; padding: 6px; }
+svg.snapshot { width: 100%; height: auto; display: block; }
+svg.legend { width: 100%; max-width: 620px; height: auto; display: block; margin: 4px 0 8px; }
+svg.animation { width: 100%; max-width: 640px; height: auto; display: block;
+                border: 1px solid var(--line); border-radius: 4px; }
 table.compare td div { white-space: nowrap; }
 .note { color: var(--muted); font-style: italic; }
 .warning { border-left: 4px solid #e0a800; background: #fff8e1; padding: 8px 12px; }
@@ -314,13 +389,42 @@ std::vector<Figure> run_figures(const RunCurves& c, const Summary& summary,
                                 "attempts (cut-backs) before it."
                               : "Newton iterations of each accepted step (no cut-backs).",
                   ""});
+  {
+    std::vector<Series> steps = {c.dt};
+    if (!c.cutback_steps.t.empty()) steps.push_back(c.cutback_steps);
+    Figure dt{"step-size",
+              "Step size",
+              "dt",
+              Axis::Log,
+              steps,
+              std::nullopt,
+              "The step that led to each state (steps are split at located impacts and cut "
+              "back when Newton fails)",
+              ""};
+    dt.caption += c.cutback_steps.t.empty()
+                      ? "; no step was cut back."
+                      : fmt::format("; triangles: the {} steps accepted after a cut-back.",
+                                    c.cutback_steps.t.size());
+    figs.push_back(dt);
+  }
   if (!c.contact.empty())
     figs.push_back({"contact", "Active contact nodes", "nodes", Axis::Steps, c.contact,
                     std::nullopt, "Slave nodes in the active set after each step.", ""});
-  if (!c.events.empty())
-    figs.push_back(
-        {"contact-events", "Contact events", "per step", Axis::Steps, c.events, std::nullopt,
-         "Impacts located (the step is split there) and releases within each step.", ""});
+  if (!c.events.empty()) {
+    Figure ev{"contact-events",
+              "Contact events",
+              "per step",
+              Axis::Steps,
+              c.events,
+              std::nullopt,
+              "Impacts located (the step is split there) and releases within each step.",
+              ""};
+    if (std::all_of(c.events.begin(), c.events.end(), [](const Series& s) {
+          return std::all_of(s.y.begin(), s.y.end(), [](double y) { return y == 0.0; });
+        }))
+      ev.note = "no contact event (impact located or release) in any step";
+    figs.push_back(ev);
+  }
   if (!c.penetration.empty())
     figs.push_back({"penetration", "Penetration", "depth", Axis::Log, c.penetration, std::nullopt,
                     "Deepest penetration of an inactive slave node." + floor_caption(true), ""});
@@ -409,8 +513,11 @@ std::optional<Figure> pressure_figure(const fs::path& path) {
   const auto at = [&](const char* name) {
     return static_cast<std::size_t>(std::find(names.begin(), names.end(), name) - names.begin());
   };
-  const std::size_t pair = at("pair"), x = at("x"), p = at("pressure");
-  if (pair >= names.size() || x >= names.size() || p >= names.size()) return std::nullopt;
+  const std::size_t pair = at("pair"), x = at("x"), y = at("y"), p = at("pressure");
+  if (pair >= names.size() || x >= names.size() || y >= names.size() || p >= names.size())
+    return std::nullopt;
+  // Each pair's last node, to measure the arc length from.
+  std::vector<std::pair<double, double>> last;
   std::vector<Series> series;
   while (std::getline(in, line)) {
     if (!line.empty() && line.back() == '\r') line.pop_back();
@@ -420,9 +527,17 @@ std::optional<Figure> pressure_figure(const fs::path& path) {
                            [&](const Series& s) { return s.label == cells[pair]; });
     if (it == series.end()) {
       series.push_back({cells[pair], {}, {}});
+      last.emplace_back(0.0, 0.0);
       it = series.end() - 1;
     }
-    it->t.push_back(std::strtod(cells[x].c_str(), nullptr));
+    // Rows run along the slave surface: the arc length is the sum of the
+    // distances between successive active nodes (from the first of them).
+    auto& [px, py] = last[static_cast<std::size_t>(it - series.begin())];
+    const double nx = std::strtod(cells[x].c_str(), nullptr);
+    const double ny = std::strtod(cells[y].c_str(), nullptr);
+    it->t.push_back(it->t.empty() ? 0.0 : it->t.back() + std::hypot(nx - px, ny - py));
+    px = nx;
+    py = ny;
     it->y.push_back(std::strtod(cells[p].c_str(), nullptr));
   }
   Figure fig{"contact-pressure",
@@ -432,9 +547,10 @@ std::optional<Figure> pressure_figure(const fs::path& path) {
              std::move(series),
              std::nullopt,
              "p<sub>A</sub> = &minus;&lambda;<sub>A</sub> / w<sub>A</sub> at each active slave "
-             "node of the last state, against its x (contact.csv).",
+             "node of the last state, along the slave surface: against the arc length s through "
+             "the active nodes in their order on the surface, from the first (contact.csv).",
              ""};
-  fig.xlabel = "x";
+  fig.xlabel = "arc length s along the slave surface";
   fig.points = true;
   fig.from_zero = true;
   if (fig.series.empty()) fig.note = "no active contact node at the end";
@@ -573,6 +689,8 @@ void write_report(const std::string& dir, const ReportInfo& info, const Summary&
   }
   html += checks_html(json) + "</section>\n";
 
+  if (info.bodies) html += snapshots_html(*info.bodies);
+
   html += "<section id=\"scheme\">\n<h2>Scheme and settings</h2>\n" + settings_html(info) +
           "</section>\n";
 
@@ -588,6 +706,11 @@ void write_report(const std::string& dir, const ReportInfo& info, const Summary&
           curves, summary,
           check_limit(json, curves.energy_balance ? "energy_balance_rel" : "energy_rel"),
           check_limit(json, "constraint"));
+      const std::vector<Band> bands = history_bands(table);
+      for (auto& f : figures) {
+        f.bands = bands;
+        if (f.note.empty()) f.caption += bands_caption(bands);
+      }
     }
     // The pressure is what a static contact analysis is for: its figure first.
     if (auto pressure = pressure_figure(folder / "contact.csv"))
