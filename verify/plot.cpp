@@ -266,7 +266,7 @@ std::string add_bands(std::string svg, const Figure& fig, const std::string& are
     const double width = std::max(1.0, (c - a) / (x1 - x0) * (px1 - px0));
     rects += fmt::format(
         "<rect class=\"band {}\" data-t0=\"{:.17g}\" data-t1=\"{:.17g}\" x=\"{:.2f}\" "
-        "y=\"{:.2f}\" width=\"{:.2f}\" height=\"{:.2f}\" fill=\"{}\" fill-opacity=\"0.35\"/>\n",
+        "y=\"{:.2f}\" width=\"{:.2f}\" height=\"{:.2f}\" fill=\"{}\" fill-opacity=\"0.25\"/>\n",
         b.kind, b.t0, b.t1, left, height - py1, width, py1 - py0, band_colour(b.kind));
   }
   svg.insert(at + 7, rects + "</g>\n");
@@ -335,7 +335,7 @@ Plot draw(const Figure& fig, const ScratchFolder& scratch) {
                                     {"contact", "contact window"}})
     if (std::any_of(fig.bands.begin(), fig.bands.end(),
                     [&kind = kind](const Band& b) { return b.kind == kind; }))
-      plots += fmt::format(", NaN with boxes fs solid 0.35 noborder lc rgb '{}' title {}",
+      plots += fmt::format(", NaN with boxes fs solid 0.25 noborder lc rgb '{}' title {}",
                            band_colour(kind), gp_quote(label));
 
   std::string range;

@@ -233,7 +233,7 @@ table.compare td { max-width: 320px; }
 .mark.warn { color: #b26a00; }
 ul.verdicts { list-style: none; padding: 0; margin: 6px 0; }
 ul.verdicts li { padding: 3px 0; }
-.snapshots { display: grid; grid-template-columns: repeat(auto-fill, minmax(300px, 1fr));
+.snapshots { display: grid; grid-template-columns: repeat(auto-fill, minmax(280px, 1fr));
              gap: 12px 18px; }
 .snapshots figure { border: 1px solid var(--line); border-radius: 4px; padding: 6px; }
 svg.snapshot { width: 100%; height: auto; display: block; }
@@ -557,6 +557,33 @@ std::optional<Figure> pressure_figure(const fs::path& path) {
   return fig;
 }
 
+// The pressure along each slave surface at the drawn states of the bodies
+// (verify/snapshots.hpp), or nothing when no drawn state has contact.
+std::optional<Figure> surface_pressure_figure(const BodySnapshots& bodies) {
+  const auto profiles = surface_pressures(bodies);
+  if (profiles.empty()) return std::nullopt;
+  Figure fig{"contact-pressure",
+             "Contact pressure along the slave surface",
+             "pressure",
+             Axis::Linear,
+             {},
+             std::nullopt,
+             "p<sub>A</sub> = &minus;&lambda;<sub>A</sub> / w<sub>A</sub> at the slave nodes "
+             "against the arc length s along the deformed surface (from two nodes before the "
+             "stretch that is ever active), at the drawn states of the bodies and at a few "
+             "more within the contact windows; zero where a node is not in contact.",
+             ""};
+  const bool several = std::any_of(profiles.begin(), profiles.end(),
+                                   [&](const auto& p) { return p.body != profiles[0].body; });
+  for (const auto& p : profiles)
+    fig.series.push_back(
+        {fmt::format("{}t = {:.4g}", several ? p.body + ", " : "", p.t), p.s, p.p});
+  fig.xlabel = "arc length s along the slave surface";
+  fig.points = true;
+  fig.from_zero = true;
+  return fig;
+}
+
 // A curve that is exactly zero throughout says more in words than as a line
 // along the bottom of a logarithmic axis.
 void drop_zero_curves(std::vector<Figure>& figs) {
@@ -691,9 +718,6 @@ void write_report(const std::string& dir, const ReportInfo& info, const Summary&
 
   if (info.bodies) html += snapshots_html(*info.bodies);
 
-  html += "<section id=\"scheme\">\n<h2>Scheme and settings</h2>\n" + settings_html(info) +
-          "</section>\n";
-
   html += "<section id=\"history\">\n<h2>History</h2>\n";
   std::vector<Figure> figures;
   try {
@@ -712,8 +736,13 @@ void write_report(const std::string& dir, const ReportInfo& info, const Summary&
         if (f.note.empty()) f.caption += bands_caption(bands);
       }
     }
+    // The pressure along the surface through the impacts, from the drawn
+    // states; the last state's (contact.csv) when there are none.
+    std::optional<Figure> profile;
+    if (info.bodies && !summary.static_analysis) profile = surface_pressure_figure(*info.bodies);
+    if (profile) figures.push_back(std::move(*profile));
     // The pressure is what a static contact analysis is for: its figure first.
-    if (auto pressure = pressure_figure(folder / "contact.csv"))
+    else if (auto pressure = pressure_figure(folder / "contact.csv"))
       figures.insert(summary.static_analysis ? figures.begin() : figures.end(),
                      std::move(*pressure));
     html += fmt::format(
@@ -727,6 +756,10 @@ void write_report(const std::string& dir, const ReportInfo& info, const Summary&
     html += "<p class=\"warning\">No plots: " + html_escape(e.what()) + "</p>\n";
   }
   html += "</section>\n";
+
+  // The settings after the figures: the page opens with what the run did.
+  html += "<section id=\"scheme\">\n<h2>Scheme and settings</h2>\n" + settings_html(info) +
+          "</section>\n";
 
   html +=
       "<section id=\"summary\">\n<h2>Summary</h2>\n" + summary_table_html(json) + "</section>\n";

@@ -313,8 +313,7 @@ std::string legend_svg(const Scales& sc, double p_max) {
 
 }  // namespace
 
-std::string snapshots_html(const BodySnapshots& s) {
-  if (s.empty()) return "";
+std::vector<std::pair<const BodyFrame*, std::string>> chosen_frames(const BodySnapshots& s) {
   // Which states the panels show.
   std::vector<Panel> panels;
   const auto fmt_t = [](double t) { return fmt::format("t = {:.4g}", t); };
@@ -360,6 +359,111 @@ std::string snapshots_html(const BodySnapshots& s) {
   panels = std::move(unique);
   std::sort(panels.begin(), panels.end(),
             [](const Panel& a, const Panel& b) { return a.frame->t < b.frame->t; });
+
+  std::vector<std::pair<const BodyFrame*, std::string>> out;
+  for (const auto& p : panels) out.emplace_back(p.frame, p.label);
+  return out;
+}
+
+std::vector<SurfacePressure> surface_pressures(const BodySnapshots& s) {
+  std::vector<SurfacePressure> out;
+  // The drawn states and, within the contact windows, a few of the
+  // animation's frames: the pressure's course through an impact.
+  auto frames = chosen_frames(s);
+  std::vector<const BodyFrame*> in_contact;
+  for (const auto& f : s.frames)
+    if (f.active_contacts > 0) in_contact.push_back(&f);
+  const std::size_t extra = std::min<std::size_t>(in_contact.size(), 4);
+  for (std::size_t k = 0; k < extra; ++k) {
+    const BodyFrame* f = in_contact[(2 * k + 1) * in_contact.size() / (2 * extra)];
+    if (std::none_of(frames.begin(), frames.end(),
+                     [f](const auto& c) { return c.first->step == f->step; }))
+      frames.emplace_back(f, "");
+  }
+  std::sort(frames.begin(), frames.end(),
+            [](const auto& a, const auto& b) { return a.first->t < b.first->t; });
+  for (std::size_t b = 0; b < s.bodies.size(); ++b) {
+    const auto& edges = s.bodies[b].slave_edges;
+    if (edges.empty()) continue;
+    // The surface's nodes in order; a closed surface (a ring) is a cycle.
+    std::vector<int> chain = {edges.front()[0]};
+    for (const auto& e : edges) {
+      if (e[0] != chain.back()) break;  // a second piece: the first is drawn
+      chain.push_back(e[1]);
+    }
+    const bool closed = chain.size() > 2 && chain.back() == chain.front();
+    if (closed) chain.pop_back();
+    const std::size_t n = chain.size();
+    // Nodes active at some drawn state.
+    std::vector<char> active(n, 0);
+    bool any = false;
+    for (const auto& [f, label] : frames)
+      for (const auto& [node, p] : f->pressure[b])
+        if (p > 0)
+          for (std::size_t k = 0; k < n; ++k)
+            if (chain[k] == node) active[k] = any = 1;
+    if (!any) continue;
+    // A cycle starts in the middle of its longest inactive stretch, so that
+    // the active one is not split at the surface's first node.
+    std::size_t start = 0;
+    if (closed) {
+      std::size_t best = 0, best_at = 0;
+      for (std::size_t k = 0; k < n; ++k) {
+        if (active[k]) continue;
+        std::size_t len = 0;
+        while (len < n && !active[(k + len) % n]) ++len;
+        if (len > best) {
+          best = len;
+          best_at = k;
+        }
+      }
+      start = (best_at + best / 2) % n;
+    }
+    std::vector<int> order(n);
+    std::vector<char> on(n);
+    for (std::size_t k = 0; k < n; ++k) {
+      order[k] = chain[(start + k) % n];
+      on[k] = active[(start + k) % n];
+    }
+    std::size_t lo = n, hi = 0;
+    for (std::size_t k = 0; k < n; ++k)
+      if (on[k]) {
+        lo = std::min(lo, k);
+        hi = k;
+      }
+    lo = lo >= 2 ? lo - 2 : 0;
+    hi = std::min(n - 1, hi + 2);
+    for (const auto& [f, label] : frames) {
+      std::vector<double> p(f->x[b].size() / 2, 0.0);
+      bool pressed = false;
+      for (const auto& [node, value] : f->pressure[b])
+        if (node >= 0 && static_cast<std::size_t>(node) < p.size() && value > 0) {
+          p[node] = value;
+          pressed = true;
+        }
+      if (!pressed) continue;
+      SurfacePressure sp{s.bodies[b].name, f->t, {}, {}};
+      double arc = 0.0;
+      for (std::size_t k = lo; k <= hi; ++k) {
+        if (k > lo) {
+          const int a = order[k - 1], c = order[k];
+          arc +=
+              std::hypot(f->x[b][2 * c] - f->x[b][2 * a], f->x[b][2 * c + 1] - f->x[b][2 * a + 1]);
+        }
+        sp.s.push_back(arc);
+        sp.p.push_back(p[order[k]]);
+      }
+      out.push_back(std::move(sp));
+    }
+  }
+  return out;
+}
+
+std::string snapshots_html(const BodySnapshots& s) {
+  if (s.empty()) return "";
+  std::vector<Panel> panels;
+  for (const auto& [frame, label] : chosen_frames(s)) panels.push_back({frame, label});
+  const auto fmt_t = [](double t) { return fmt::format("t = {:.4g}", t); };
 
   // Common axes and scales for every drawing: the motion shows.
   std::vector<const BodyFrame*> all;

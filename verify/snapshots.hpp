@@ -103,6 +103,22 @@ class SnapshotRecorder {
   double last_t_ = 0.0;
 };
 
+/// The states the report draws, with their captions: at the scene's
+/// snapshot times, or chosen (before, during and after each contact window;
+/// without contact the start, middle and end), in time order.
+std::vector<std::pair<const BodyFrame*, std::string>> chosen_frames(const BodySnapshots& s);
+
+/// The contact pressure along a body's slave surface at one drawn state:
+/// p at the surface's nodes against the arc length s (current
+/// configuration), over the stretch that is active at some drawn state
+/// (and two nodes either side), s = 0 at its first node.
+struct SurfacePressure {
+  std::string body;
+  double t = 0.0;
+  std::vector<double> s, p;
+};
+std::vector<SurfacePressure> surface_pressures(const BodySnapshots& s);
+
 /// The report's section on the bodies: the snapshots as a grid of SVGs with
 /// a legend, and the animation; "" when there are no bodies.
 std::string snapshots_html(const BodySnapshots& s);
