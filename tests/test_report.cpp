@@ -220,8 +220,11 @@ void expect_snapshots(const std::string& html, const nlohmann::json& summary) {
   const double first = summary["contact_window"][0].get<double>();
   const double last = summary["contact_window"][1].get<double>();
   const int panels = count(html, "<svg class=\"snapshot\"");
-  ASSERT_GE(panels, 3);
-  bool before = false, during = false, after = false;
+  // Before, first contact, a third and two thirds through, most active
+  // nodes, after, the end: successive states as in the paper's Fig. 7.
+  ASSERT_GE(panels, 5);
+  bool before = false, after = false;
+  int during = 0;
   for (int i = 0; i < panels; ++i) {
     const std::string svg = nth_block(html, "<svg class=\"snapshot\"", "</svg>", i);
     // Every element of both rings (2 x 64) is drawn, as one polygon each.
@@ -234,17 +237,21 @@ void expect_snapshots(const std::string& html, const nlohmann::json& summary) {
       EXPECT_EQ(pressed, 0) << "t = " << t;
       EXPECT_EQ(svg.find("class=\"pressure\""), std::string::npos);
     } else if (t <= last) {
-      during = true;
-      // The contact pressure is drawn along the active surface.
-      EXPECT_GT(pressed, 0) << "t = " << t;
-      EXPECT_GE(count(nth_block(svg, "<g class=\"pressure\"", "</g>", 0), "<polygon"), pressed - 1);
+      // The contact pressure is drawn along the active surface (the active
+      // set of an impact can be empty for a step while the rings touch).
+      during += pressed > 0 ? 1 : 0;
+      if (pressed > 0) {
+        EXPECT_GE(count(nth_block(svg, "<g class=\"pressure\"", "</g>", 0), "<polygon"),
+                  pressed - 1);
+      }
     } else {
       after = true;
       EXPECT_EQ(pressed, 0) << "t = " << t;
     }
   }
-  EXPECT_TRUE(before && during && after) << before << during << after;
-  for (const char* caption : {"before contact", "during contact", "after contact"})
+  EXPECT_TRUE(before && after) << before << after;
+  EXPECT_GE(during, 2);  // at least the first contact and the most active nodes
+  for (const char* caption : {"before contact", "first contact", "during contact", "after contact"})
     EXPECT_NE(html.find(caption), std::string::npos) << caption;
   // The legend: the stress colour bar with its range, and the pressure key.
   EXPECT_NE(html.find("class=\"colour-bar\""), std::string::npos);

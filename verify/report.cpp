@@ -162,16 +162,16 @@ std::vector<Band> history_bands(const Table& h) {
   // Contact windows: from the first to the last row of each run of rows
   // with active contact nodes (the recorder's contact_window).
   // The active set of an impact can empty for a few steps while the bodies
-  // are still together: a gap no longer than the window so far (or three
-  // steps) continues it (the same rule as the drawings of the bodies).
+  // are still together: contact_gap_continues (verify/snapshots.hpp) says
+  // when a window goes on, as for the drawings of the bodies.
   if (const auto* a = h.column("active_contacts")) {
     bool open = false;
     Band* window = nullptr;
     for (std::size_t i = 0; i < t->size(); ++i) {
       if ((*a)[i] > 0) {
         if (!open) {
-          const double step = i > 0 ? (*t)[i] - (*t)[i - 1] : 0.0;
-          if (!window || (*t)[i] - window->t1 > std::max(window->t1 - window->t0, 3.0 * step)) {
+          if (!window ||
+              !contact_gap_continues(window->t0, window->t1, (*t)[i], t->back() - t->front())) {
             bands.push_back({(*t)[i], (*t)[i], "contact"});
             window = &bands.back();
           }

@@ -27,6 +27,10 @@ double equivalent_stress(const Q1Element& element, const Vec& q_local) {
 
 }  // namespace
 
+bool contact_gap_continues(double first, double last, double t, double run_length) {
+  return t - last <= std::max(last - first, 0.05 * run_length);
+}
+
 SnapshotRecorder::SnapshotRecorder(std::vector<VtuBody> bodies,
                                    std::vector<std::vector<std::array<int, 2>>> slave_edges,
                                    std::vector<double> times, int frames, double t_start,
@@ -112,21 +116,24 @@ void SnapshotRecorder::observe(const State& state, long step, int active_contact
     data_.requested.push_back(capture(state, step, active_contacts));
     ++next_time_;
   }
-  // Contact windows, and the state of most active nodes within each. The
-  // active set of an impact can empty for a few steps while the bodies are
-  // still together: a gap no longer than the window so far (or than a few
-  // steps) continues it (contact_windows() in verify/page.hpp, the same rule).
+  // Contact windows, their first state and the state of most active nodes
+  // within each. The active set of an impact can empty for a few steps while
+  // the bodies are still together: a gap no longer than the window so far,
+  // or than a twentieth of the run, continues it (contact_gap_continues, the
+  // rule of the shading too).
   if (active_contacts > 0) {
     if (!in_window_) {
       in_window_ = true;
-      const bool continues = !data_.windows.empty() &&
-                             state.t - data_.windows.back().second <=
-                                 std::max(data_.windows.back().second - data_.windows.back().first,
-                                          3.0 * (state.t - last_t_));
+      const bool continues =
+          !data_.windows.empty() &&
+          contact_gap_continues(data_.windows.back().first, data_.windows.back().second, state.t,
+                                data_.t_end - data_.t_start);
       if (!continues) {
         data_.windows.emplace_back(state.t, state.t);
-        if (data_.windows.size() <= static_cast<std::size_t>(kMaxWindows))
-          data_.during.push_back(capture(state, step, active_contacts));
+        if (data_.windows.size() <= static_cast<std::size_t>(kMaxWindows)) {
+          data_.window_start.push_back(capture(state, step, active_contacts));
+          data_.during.push_back(data_.window_start.back());
+        }
       }
     }
     data_.windows.back().second = state.t;
@@ -334,9 +341,22 @@ std::vector<std::pair<const BodyFrame*, std::string>> chosen_frames(const BodySn
       const std::string which =
           s.windows.size() > 1 ? fmt::format(" contact window {}", w + 1) : " contact";
       if (before) panels.push_back({before, fmt_t(before->t) + ", before" + which});
+      if (w < s.window_start.size())
+        panels.push_back({&s.window_start[w], fmt_t(s.window_start[w].t) + ", first" + which});
+      // Successive states through the window, as the paper's Fig. 7: the
+      // frames nearest a third and two thirds of the way.
+      for (const double part : {1.0 / 3.0, 2.0 / 3.0}) {
+        const double target = first + part * (last - first);
+        const BodyFrame* nearest = nullptr;
+        for (const auto& f : s.frames)
+          if (f.t > first && f.t < last &&
+              (!nearest || std::abs(f.t - target) < std::abs(nearest->t - target)))
+            nearest = &f;
+        if (nearest) panels.push_back({nearest, fmt_t(nearest->t) + ", during" + which});
+      }
       panels.push_back(
-          {&s.during[w], fmt::format("{}, during{} ({} active nodes)", fmt_t(s.during[w].t), which,
-                                     s.during[w].active_contacts)});
+          {&s.during[w], fmt::format("{}, during{} (most active nodes: {})", fmt_t(s.during[w].t),
+                                     which, s.during[w].active_contacts)});
       if (after) panels.push_back({after, fmt_t(after->t) + ", after" + which});
     }
     if (s.frames.size() > 1 && s.frames.back().t > s.windows.back().second)

@@ -17,9 +17,9 @@
 // out-of-plane stress of plane strain is not part of it (see vtu.hpp).
 //
 // Without snapshot times the report chooses them: for each contact window
-// the last frame before it, the state of most active contact nodes within
-// it and the first frame after it; without contact, the first, middle and
-// last frames.
+// a frame well before it, its first state, the frames a third and two
+// thirds of the way through, the state of most active contact nodes and the
+// first frame after it; without contact, the first, middle and last frames.
 #pragma once
 
 #include <array>
@@ -34,6 +34,12 @@
 #include "verify/vtu.hpp"
 
 namespace emdae {
+
+/// Whether contact that resumes at `t` continues the window [first, last]
+/// (rather than start another): the active set of one impact can empty for
+/// a few steps while the bodies are still together. True when the gap is no
+/// longer than the window so far or than a twentieth of the run's length.
+bool contact_gap_continues(double first, double last, double t, double run_length);
 
 /// One kept state of the bodies.
 struct BodyFrame {
@@ -60,9 +66,11 @@ struct BodySnapshots {
   std::vector<BodyFrame> frames;     // evenly spread over the run, in time order
   std::vector<BodyFrame> requested;  // at the scene's snapshot times
   std::vector<double> requested_times;
-  std::vector<BodyFrame> during;  // per contact window, the state of most active nodes
+  std::vector<BodyFrame> window_start;  // per contact window, its first state
+  std::vector<BodyFrame> during;        // per contact window, the state of most active nodes
   // Contact windows [first, last active]; a window continues through a gap
-  // in the active set no longer than itself so far (or three steps).
+  // in the active set no longer than itself so far or than a twentieth of
+  // the run (contact_gap_continues).
   std::vector<std::pair<double, double>> windows;
   double t_start = 0.0, t_end = 0.0;
   bool empty() const { return bodies.empty(); }
