@@ -54,6 +54,11 @@ SnapshotRecorder::SnapshotRecorder(std::vector<VtuBody> bodies,
   frames_ = frames;
   if (per_frame > 0 && frames_ * per_frame > kMaxValues)
     frames_ = std::max(2, static_cast<int>(kMaxValues / per_frame));
+  // And the page that plays them stays a few MB: each frame is drawn whole.
+  int elements = 0;
+  for (const auto& b : bodies_) elements += b.mesh.n_elements();
+  if (elements > 0 && frames_ > 2 && frames_ * elements > kMaxDrawnElements)
+    frames_ = std::max(2, kMaxDrawnElements / elements);
   data_.requested_times = std::move(times);
   data_.t_start = t_start;
   data_.t_end = t_end;
@@ -257,7 +262,7 @@ std::string body_svg(const BodySnapshots& s, const BodyFrame& f, const View& v, 
   // The pressure along the slave surfaces: a band into the slave body whose
   // width is the pressure (p_max: p_length).
   out +=
-      "<g class=\"pressure\" fill=\"#e4572e\" fill-opacity=\"0.8\" stroke=\"#8b1a00\" "
+      "<g class=\"pressure\" fill=\"#e4572e\" fill-opacity=\"0.65\" stroke=\"#8b1a00\" "
       "stroke-width=\"0.8\">\n";
   for (std::size_t b = 0; b < s.bodies.size() && b < f.x.size(); ++b) {
     if (f.pressure[b].empty()) continue;
@@ -359,7 +364,7 @@ std::vector<std::pair<const BodyFrame*, std::string>> chosen_frames(const BodySn
                                      which, s.during[w].active_contacts)});
       if (after) panels.push_back({after, fmt_t(after->t) + ", after" + which});
     }
-    if (s.frames.size() > 1 && s.frames.back().t > s.windows.back().second)
+    if (s.frames.size() > 1)
       panels.push_back({&s.frames.back(), fmt_t(s.frames.back().t) + ", end of the run"});
   } else if (!s.frames.empty()) {
     panels.push_back({&s.frames.front(), fmt_t(s.frames.front().t) + ", start"});
@@ -505,7 +510,7 @@ std::string snapshots_html(const BodySnapshots& s) {
         if (std::isfinite(value)) sc.p_max = std::max(sc.p_max, value);
   }
   if (!(sc.s_hi >= sc.s_lo)) sc.s_lo = sc.s_hi = 0;
-  sc.p_length = 0.06 * 1000.0 / v.scale;
+  sc.p_length = 0.04 * 1000.0 / v.scale;
 
   const int elements = element_count(s);
   std::string out = "<section id=\"bodies\">\n<h2>The bodies</h2>\n";

@@ -9,7 +9,8 @@
 // kept state holds the nodes' positions, one stress value per element and
 // the pressure of the active slave nodes; when the bodies are large the
 // number of animation frames is reduced so that the frames hold at most
-// about kMaxValues numbers.
+// about kMaxValues numbers and draw at most kMaxDrawnElements elements
+// (the page stays a few MB).
 //
 // Stress measure: the in-plane von Mises equivalent of the element's Cauchy
 // stress averaged over its Gauss points (the same average as the VTU
@@ -80,6 +81,7 @@ class SnapshotRecorder {
  public:
   static constexpr int kMaxWindows = 4;
   static constexpr double kMaxValues = 4e6;
+  static constexpr int kMaxDrawnElements = 30000;  // over the animation's frames
 
   /// Per system node, the contact pressure of the active slave nodes.
   using Pressures = std::function<std::vector<std::pair<int, double>>(const State&)>;
