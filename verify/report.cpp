@@ -398,8 +398,9 @@ std::vector<Figure> run_figures(const RunCurves& c, const Summary& summary,
               Axis::Log,
               steps,
               std::nullopt,
-              "The step that led to each state (steps are split at located impacts and cut "
-              "back when Newton fails)",
+              "The step that led to each state (history.csv's dt: a step split at located "
+              "impacts counts whole; a step cut back when Newton fails is the shorter one "
+              "accepted)",
               ""};
     dt.caption += c.cutback_steps.t.empty()
                       ? "; no step was cut back."

@@ -227,7 +227,8 @@ View view_of(const std::vector<const BodyFrame*>& frames) {
 }
 
 struct Scales {
-  double s_lo = 0, s_hi = 1;  // stress
+  double s_lo = 0, s_hi = 1;  // stress: the colour scale
+  double s_max = 1;           // the largest drawn (above s_hi: the top colour)
   double p_max = 0;           // pressure
   double p_length = 0;        // model length of p_max's bar
 };
@@ -311,7 +312,8 @@ std::string legend_svg(const Scales& sc, double p_max) {
       "<text x=\"10\" y=\"38\">{}</text><text x=\"310\" y=\"38\" "
       "text-anchor=\"end\">{}</text><text x=\"160\" y=\"52\" text-anchor=\"middle\">"
       "equivalent stress &#963;<tspan font-size=\"9\" dy=\"3\">vM</tspan></text>",
-      report_detail::sci(sc.s_lo), report_detail::sci(sc.s_hi));
+      report_detail::sci(sc.s_lo),
+      (sc.s_max > sc.s_hi ? "&#8805; " : "") + report_detail::sci(sc.s_hi));
   if (p_max > 0)
     out += fmt::format(
         "<rect class=\"pressure-key\" x=\"350\" y=\"8\" width=\"60\" height=\"14\" "
@@ -496,23 +498,32 @@ std::string snapshots_html(const BodySnapshots& s) {
   for (const auto& f : s.frames) all.push_back(&f);
   const View v = view_of(all);
   Scales sc;
-  sc.s_lo = std::numeric_limits<double>::infinity();
-  sc.s_hi = -sc.s_lo;
+  // The colour scale ends at the 99th percentile of the drawn stresses: a
+  // few extreme elements (an impact's corner, a blow-up) would otherwise
+  // leave every other one in the darkest colour. Above it: the top colour.
+  std::vector<double> stresses;
   for (const auto* f : all) {
     for (const auto& st : f->stress)
       for (double x : st)
-        if (std::isfinite(x)) {
-          sc.s_lo = std::min(sc.s_lo, x);
-          sc.s_hi = std::max(sc.s_hi, x);
-        }
+        if (std::isfinite(x)) stresses.push_back(x);
     for (const auto& p : f->pressure)
       for (const auto& [node, value] : p)
         if (std::isfinite(value)) sc.p_max = std::max(sc.p_max, value);
   }
-  if (!(sc.s_hi >= sc.s_lo)) sc.s_lo = sc.s_hi = 0;
+  if (!stresses.empty()) {
+    const auto top = stresses.begin() + static_cast<std::ptrdiff_t>(0.99 * (stresses.size() - 1));
+    std::nth_element(stresses.begin(), top, stresses.end());
+    sc.s_hi = *top;
+    sc.s_lo = *std::min_element(stresses.begin(), stresses.end());
+    sc.s_max = *std::max_element(stresses.begin(), stresses.end());
+  } else {
+    sc.s_lo = sc.s_hi = sc.s_max = 0;
+  }
   sc.p_length = 0.04 * 1000.0 / v.scale;
 
   const int elements = element_count(s);
+  const bool has_slaves = std::any_of(s.bodies.begin(), s.bodies.end(),
+                                      [](const DrawnBody& b) { return !b.slave_edges.empty(); });
   std::string out = "<section id=\"bodies\">\n<h2>The bodies</h2>\n";
   std::string when = s.requested.empty()
                          ? (s.windows.empty() ? "at the start, the middle and the end of the run"
@@ -521,8 +532,14 @@ std::string snapshots_html(const BodySnapshots& s) {
                          : "at the times the scene lists ([output] snapshots)";
   out += "<p class=\"meta\">The deformed bodies " + when +
          ", drawn from the run's own states on common axes; each element coloured by its "
-         "equivalent (von Mises) in-plane Cauchy stress, the contact pressure drawn as a band "
-         "along the active slave surface.</p>\n";
+         "equivalent (von Mises) in-plane Cauchy stress" +
+         (sc.s_max > sc.s_hi ? fmt::format(" (the scale ends at the 99th percentile; the "
+                                           "largest, {}, is drawn in its top colour)",
+                                           report_detail::sci(sc.s_max))
+                             : std::string()) +
+         (has_slaves ? ", the contact pressure drawn as a band along the active slave surface"
+                     : std::string()) +
+         ".</p>\n";
   if (panels.empty())
     out +=
         "<p class=\"placeholder\">no state of the bodies was kept (the run stopped before "
