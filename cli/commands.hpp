@@ -48,6 +48,7 @@ struct CompareOptions {
   std::string out_dir;  // empty: out/<scene name>-compare
   std::vector<std::string> overrides;
   bool quiet = false;
+  bool strict = false;  // a missed [tolerances] check exits 4 (otherwise 0)
 };
 
 struct StudyOptions {
@@ -68,9 +69,12 @@ struct StudyOptions {
 int command_run(const RunOptions& options, std::ostream& out, std::ostream& err);
 
 /// Runs the scene once per scheme into DIR/<scheme>/ (each with its report)
-/// and writes DIR/compare.html. Exit code: the worst of the runs (a scheme
-/// that refuses the scene counts as a failed run, 3); bad input (scene,
-/// unknown scheme name) is 2 before anything runs.
+/// and writes DIR/compare.html and compare.json (each scheme's verdict).
+/// Exit code: 0 when every run finished, even when a scheme misses a
+/// [tolerances] check (that is the comparison's finding, not its failure;
+/// with `strict` it is 4); otherwise the worst of the runs (a scheme that
+/// refuses the scene counts as a failed run, 3); bad input (scene, unknown
+/// scheme name) is 2 before anything runs.
 int command_compare(const CompareOptions& options, std::ostream& out, std::ostream& err);
 
 /// Runs the scene with scheme em at the reference step (and at twice it,

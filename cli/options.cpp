@@ -72,7 +72,7 @@ int emdae_main(int argc, char** argv) {
       "A scene file (TOML) in; history.csv, summary.json, report.html (and VTU fields for\n"
       "FE bodies) out.",
       "emdae"};
-  app.set_version_flag("--version", std::string("emdae ") + EMDAE_VERSION);
+  app.set_version_flag("-V,--version", std::string("emdae ") + EMDAE_VERSION);
   app.footer(kExitCodesHelp);
   app.require_subcommand(0, 1);
 
@@ -106,9 +106,14 @@ int emdae_main(int argc, char** argv) {
   out_option(compare, compare_options.out_dir, "out/<scene name>-compare");
   set_option(compare, compare_options.overrides);
   compare->add_flag("-q,--quiet", compare_options.quiet, "No progress lines and no table");
+  compare->add_flag("--strict", compare_options.strict,
+                    "Exit 4 when a scheme misses a [tolerances] check of the scene (without it "
+                    "a comparison whose runs all finished exits 0)");
   compare->footer(std::string(kExitCodesHelp) +
-                  "\n\ncompare exits with the worst code of its runs; a scheme that refuses "
-                  "the scene\ncounts as a failed run (3).");
+                  "\n\ncompare exits 0 when every run finished, whatever the [tolerances] "
+                  "verdicts\n(each scheme's verdict is in compare.html and compare.json; "
+                  "--strict: 4 when one\nmisses a tolerance); otherwise with the worst code of "
+                  "its runs. A scheme that\nrefuses the scene counts as a failed run (3).");
 
   StudyOptions study_options;
   std::string study_dts, study_tols, study_times, study_measures;
@@ -196,6 +201,11 @@ int emdae_main(int argc, char** argv) {
   set_option(check, check_overrides);
   check->footer(kExitCodesHelp);
 
+  std::string help_topic;
+  CLI::App* help = app.add_subcommand(
+      "help", "Show the help of emdae or of one of its commands (emdae help compare).");
+  help->add_option("command", help_topic, "run, compare, study or check")->type_name("COMMAND");
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -205,6 +215,23 @@ int emdae_main(int argc, char** argv) {
   }
 
   try {
+    if (*help) {
+      const std::string topic = help_topic;
+      // The help of the whole program, not of the subcommand just parsed.
+      app.clear();
+      if (topic.empty() || topic == "help") {
+        std::cout << app.help();
+        return kExitOk;
+      }
+      for (CLI::App* c : {run, compare, study, check})
+        if (c->get_name() == topic) {
+          std::cout << c->help("emdae");
+          return kExitOk;
+        }
+      fmt::print(std::cerr, "emdae: error: no command '{}' (known: run, compare, study, check)\n",
+                 topic);
+      return kExitBadInput;
+    }
     if (*run) return command_run(run_options, std::cout, std::cerr);
     if (*check) return command_check(check_path, check_overrides, std::cout, std::cerr);
     if (*compare) return command_compare(compare_options, std::cout, std::cerr);

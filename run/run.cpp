@@ -13,6 +13,7 @@
 #include "verify/contact_pressure.hpp"
 #include "verify/history.hpp"
 #include "verify/report.hpp"
+#include "verify/snapshots.hpp"
 #include "verify/vtu.hpp"
 
 namespace emdae {
@@ -115,6 +116,41 @@ class FieldOutput {
   long every_ = 0, written_ = -1;
   std::unique_ptr<FieldWriter> writer_;
 };
+
+// The bodies' states the report draws (verify/snapshots.hpp), for runs that
+// write a report and have FE bodies.
+std::unique_ptr<SnapshotRecorder> make_snapshots(const Model& model, const RunSettings& settings,
+                                                 double t_start) {
+  std::vector<VtuBody> bodies;
+  std::vector<std::vector<std::array<int, 2>>> slave_edges;
+  for (const auto& b : model.bodies()) {
+    if (b.mesh.n_elements() == 0) continue;
+    bodies.push_back({b.name, b.mesh, b.info.node_offset, b.material});
+    std::vector<std::array<int, 2>> edges;
+    for (const ContactPair& pair : model.contacts()) {
+      const auto [body, set] = model.find_set(pair.slave, Model::SetKind::Edges);
+      if (body != &b) continue;
+      const auto it = b.mesh.edge_sets.find(set);
+      if (it != b.mesh.edge_sets.end())
+        edges.insert(edges.end(), it->second.begin(), it->second.end());
+    }
+    slave_edges.push_back(std::move(edges));
+  }
+  if (settings.out_dir.empty() || bodies.empty() || model.dim() != 2) return nullptr;
+  SnapshotRecorder::Pressures pressures;
+  if (model.system().n_unilateral() > 0)
+    pressures = [&system = model.system()](const State& s) {
+      std::vector<std::pair<int, double>> out;
+      for (const SlavePressure& p : slave_pressures(system, s.q, s.lambda, s.active))
+        out.emplace_back(p.node, p.pressure);
+      return out;
+    };
+  const int frames = settings.static_only ? 0 : settings.output.animation_frames;
+  const double t_end = settings.static_only ? t_start : settings.time.t_end;
+  return std::make_unique<SnapshotRecorder>(std::move(bodies), std::move(slave_edges),
+                                            settings.output.snapshots, frames, t_start, t_end,
+                                            std::move(pressures));
+}
 
 // --- the pieces of a run ----------------------------------------------------------------
 
@@ -251,6 +287,23 @@ RunResult run(Model& model, const RunSettings& settings, RunObserver* watcher) {
   }
   FieldOutput fields(model, settings, observer);
   fields.maybe_write(state, 0);
+  // A report is a view of the run: a failure to keep its drawings only costs them.
+  std::unique_ptr<SnapshotRecorder> bodies;
+  const auto snap = [&](const std::function<void()>& f) {
+    if (!bodies) return;
+    try {
+      f();
+    } catch (const std::exception& e) {
+      observer.warned(std::string("no drawings of the bodies: ") + e.what());
+      bodies.reset();
+    }
+  };
+  try {
+    bodies = make_snapshots(model, settings, state.t);
+  } catch (const std::exception& e) {
+    observer.warned(std::string("no drawings of the bodies: ") + e.what());
+  }
+  snap([&] { bodies->observe(state, 0, recorder.initial().active_contacts); });
 
   long last_written = 0;
   // A history row every `output.every` steps (and at `last`), and the fields.
@@ -260,6 +313,7 @@ RunResult run(Model& model, const RunSettings& settings, RunObserver* watcher) {
       last_written = sample.step;
     }
     fields.maybe_write(s, sample.step, last);
+    if (sample.step > 0) snap([&] { bodies->observe(s, sample.step, sample.active_contacts); });
     observer.sampled(s, sample, recorder);
   };
   // The contact table: the last state's, or for a static analysis the last
@@ -307,6 +361,7 @@ RunResult run(Model& model, const RunSettings& settings, RunObserver* watcher) {
     fields.maybe_write(state, recorder.last().step, true);
     take_contact(state);
   }
+  snap([&] { bodies->finish(state, recorder.last().step, recorder.last().active_contacts); });
   fields.close();
   std::vector<std::string> pair_names;
   for (const auto& c : model.contacts()) pair_names.push_back(c.name);
@@ -328,6 +383,7 @@ RunResult run(Model& model, const RunSettings& settings, RunObserver* watcher) {
     ReportInfo report = report_info(model, settings);
     if (contact) report.files.push_back("contact.csv");
     if (fields.active()) report.files.push_back("fields.pvd");
+    if (bodies) report.bodies = &bodies->snapshots();
     write_report(dir, report, result.summary);
   } catch (const std::exception& e) {
     // The run is judged by history and summary; a report is their view.

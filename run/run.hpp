@@ -39,6 +39,11 @@ struct OutputSettings {
   // VTU fields of the bodies every `vtu_every` steps (and the first and last);
   // -1: automatic (about 100 files over the run), 0: none.
   long vtu_every = -1;
+  // Times at which the report draws the bodies (snapshots); empty: chosen
+  // from the run (before, during and after each contact window).
+  std::vector<double> snapshots;
+  // Frames of the report's animation of the bodies over the run (0: none).
+  int animation_frames = 48;
 };
 
 /// An equilibrium solved before the dynamics, or the whole of a static

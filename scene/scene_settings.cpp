@@ -183,7 +183,7 @@ void Builder::parse_statics(const Fields& f) {
 }
 
 void Builder::parse_output(const Fields& f) {
-  f.only({"every", "vtu_every"});
+  f.only({"every", "vtu_every", "snapshots", "animation_frames"});
   const long every = f.integer("every", 1);
   if (every < 1) f.fail_key("every", "must be at least 1, received " + std::to_string(every));
   settings().output.every = static_cast<int>(std::min<long>(every, 1L << 30));
@@ -192,6 +192,18 @@ void Builder::parse_output(const Fields& f) {
     f.fail_key("vtu_every",
                "must be 0 (no fields) or at least 1, received " + std::to_string(vtu_every));
   settings().output.vtu_every = vtu_every;
+  if (f.has("snapshots")) {
+    const std::vector<double> times =
+        f.numbers("snapshots", "times at which the report draws the bodies");
+    for (std::size_t i = 0; i < times.size(); ++i) {
+      if (times[i] < 0)
+        f.fail_key("snapshots", fmt::format("must not hold negative times, received {}", times[i]));
+      if (i > 0 && times[i] <= times[i - 1]) f.fail_key("snapshots", "must be increasing times");
+    }
+    settings().output.snapshots = times;
+  }
+  settings().output.animation_frames = static_cast<int>(
+      f.integer_in("animation_frames", settings().output.animation_frames, 0, 200));
 }
 
 void Builder::parse_tolerances(const Fields& f) {

@@ -68,6 +68,25 @@ TEST(Cli, VersionAndHelp) {
     EXPECT_NE(r.output.find(s), std::string::npos) << s;
 }
 
+TEST(Cli, ShortVersionFlagAndHelpCommand) {
+  Result r = emdae("-V");
+  EXPECT_EQ(r.code, 0);
+  EXPECT_EQ(r.output.rfind(std::string("emdae ") + EMDAE_VERSION, 0), 0u) << r.output;
+  // `emdae help` is `emdae --help`; `emdae help CMD` is `emdae CMD --help`.
+  r = emdae("help");
+  EXPECT_EQ(r.code, 0);
+  EXPECT_EQ(r.output, emdae("--help").output);
+  r = emdae("help compare");
+  EXPECT_EQ(r.code, 0);
+  EXPECT_EQ(r.output, emdae("compare --help").output);
+  EXPECT_NE(r.output.find("--strict"), std::string::npos) << r.output;
+  r = emdae("help study");
+  EXPECT_NE(r.output.find("--dts"), std::string::npos) << r.output;
+  r = emdae("help frobnicate");
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.output.find("no command 'frobnicate'"), std::string::npos) << r.output;
+}
+
 TEST(Cli, UnknownOptionOrCommandIsBadInput) {
   EXPECT_EQ(emdae("--frobnicate").code, 2);
   EXPECT_EQ(emdae("frobnicate").code, 2);

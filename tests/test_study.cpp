@@ -135,8 +135,22 @@ TEST(Study, EnergyMomentumAndMidpointAreSecondOrder) {
     // Error against dt and against CPU time, and each scheme's measures, drawn.
     int svgs = 0;
     for (auto p = html.find("<svg"); p != std::string::npos; p = html.find("<svg", p + 1)) ++svgs;
-    EXPECT_EQ(svgs, 2 + 2) << html;
+    EXPECT_EQ(svgs, 3 + 2) << html;
+    // Energy error against dt; em and midpoint with markers of their own
+    // (open circles, open squares: gnuplot's point types 6 and 4), one per
+    // run, so that a scheme drawn over another stays visible.
+    const std::size_t at = html.find("<figure id=\"energy-dt\"");
+    ASSERT_NE(at, std::string::npos);
+    const std::string fig = html.substr(at, html.find("</figure>", at) - at);
+    const auto uses = [&fig](const std::string& id) {
+      int n = 0;
+      for (auto p = fig.find(id); p != std::string::npos; p = fig.find(id, p + 1)) ++n;
+      return n;
+    };
+    EXPECT_GE(uses("href='#energy-dt-gpPt5'"), 4) << fig.substr(0, 3000);
+    EXPECT_GE(uses("href='#energy-dt-gpPt3'"), 4);
   }
+  EXPECT_NE(html.find("Energy error against the step size"), std::string::npos);
 }
 
 // Generalized-alpha (Chung-Hulbert, rho_inf = 1) on the double pendulum, a

@@ -21,6 +21,7 @@ void write_comparison(const std::string& dir, const ReportInfo& info,
     std::optional<Json> summary;
     std::optional<RunCurves> curves;
     std::string problem;
+    std::vector<Band> bands;
   };
   std::vector<Loaded> loaded;
   // Contact figures get columns when some run has them.
@@ -28,7 +29,7 @@ void write_comparison(const std::string& dir, const ReportInfo& info,
       {"gap_violation_max", "gap violation"}, {"penetration_max", "penetration"}};
   std::vector<bool> shown(contact_columns.size(), false);
   for (const auto& r : runs) {
-    Loaded l{&r, std::nullopt, std::nullopt, ""};
+    Loaded l{&r, std::nullopt, std::nullopt, "", {}};
     const fs::path run_dir = folder / r.folder;
     if (!r.has_output) {
       loaded.push_back(std::move(l));
@@ -41,19 +42,80 @@ void write_comparison(const std::string& dir, const ReportInfo& info,
         for (std::size_t k = 0; k < contact_columns.size(); ++k)
           if (find_number(*l.summary, contact_columns[k].first)) shown[k] = true;
       }
-      if (l.summary && fs::exists(run_dir / "history.csv"))
-        l.curves = derive_curves(read_history(run_dir / "history.csv"));
+      if (l.summary && fs::exists(run_dir / "history.csv")) {
+        const Table table = read_history(run_dir / "history.csv");
+        l.curves = derive_curves(table);
+        l.bands = history_bands(table);
+      }
     } catch (const std::exception& e) {
       l.problem = e.what();
     }
     loaded.push_back(std::move(l));
   }
 
+  // One verdict per scheme, in words (the page) and as data (compare.json).
+  Json verdicts = Json::array();
+  std::string verdict_html = "<ul class=\"verdicts\">\n";
+  for (const auto& l : loaded) {
+    Json v;
+    v["scheme"] = l.run->scheme;
+    v["exit_code"] = l.run->exit_code;
+    std::string sentence;
+    std::string verdict;
+    if (!l.summary) {
+      verdict = "did not run";
+      sentence = l.run->message.empty() ? "no summary was written" : l.run->message;
+    } else {
+      const Json& s = *l.summary;
+      const std::string status = s.value("status", std::string("?"));
+      v["status"] = status;
+      std::vector<std::string> missed;
+      if (s.contains("checks"))
+        for (const auto& [cname, c] : s["checks"].items())
+          if (c.value("result", "") == "fail")
+            missed.push_back(fmt::format(
+                "{} {} &gt; {}", html_escape(cname),
+                c["value"].is_number() ? sci(c["value"].get<double>()) : std::string("?"),
+                c["limit"].is_number() ? sci(c["limit"].get<double>()) : std::string("?")));
+      v["checks_pass"] = s.contains("checks") ? Json(missed.empty()) : Json(nullptr);
+      if (status != "ok") {
+        verdict = "failed";
+        sentence = "stopped: " + html_escape(status);
+      } else if (!s.contains("checks")) {
+        verdict = "finished";
+        sentence = "finished; the scene declares no tolerances";
+      } else if (missed.empty()) {
+        verdict = "meets the tolerances";
+        sentence = "finished and meets every declared tolerance";
+      } else {
+        verdict = "misses a tolerance";
+        std::string list;
+        for (const auto& m : missed) list += (list.empty() ? "" : ", ") + m;
+        sentence = "finished but misses " + list;
+      }
+    }
+    v["verdict"] = verdict;
+    verdicts.push_back(v);
+    const std::string cls = verdict == "meets the tolerances" || verdict == "finished" ? "pass"
+                            : verdict == "misses a tolerance"                          ? "warn"
+                                                                                       : "fail";
+    verdict_html += fmt::format(
+        "<li class=\"verdict {}\" data-scheme=\"{}\"><code>{}</code> <span class=\"mark {}\">{}"
+        "</span> &mdash; {}</li>\n",
+        cls, html_escape(l.run->scheme), html_escape(l.run->scheme), cls, html_escape(verdict),
+        l.summary ? sentence : html_escape(sentence));
+  }
+  verdict_html += "</ul>\n";
+
   std::string schemes;
   for (const auto& r : runs) schemes += (schemes.empty() ? "" : ", ") + r.scheme;
   std::string html = page_head("emdae comparison: " + info.scene_name + " (" + schemes + ")");
   html += header_html(info, "comparison of <code>" + html_escape(schemes) + "</code>");
 
+  html += "<section id=\"verdicts\">\n<h2>Verdict per scheme</h2>\n" + verdict_html +
+          "<p class=\"note\">A scheme that finishes but misses a tolerance is a finding of the "
+          "comparison: <code>emdae compare</code> exits 0 unless run with "
+          "<code>--strict</code>.</p>\n</section>\n";
   // The table: one row per scheme, the figures a reader compares.
   html +=
       "<section id=\"table\">\n<h2>Summary figures</h2>\n<div class=\"wide\">"
@@ -196,6 +258,18 @@ void write_comparison(const std::string& dir, const ReportInfo& info,
     }
     figs[4].series.push_back(named(c.newton));
   }
+  // The shading: the contact windows and load intervals of the first run
+  // that recorded a history (the schemes' windows differ by a step or so).
+  for (const auto& l : loaded)
+    if (l.curves) {
+      for (auto& f : figs) {
+        f.bands = l.bands;
+        f.caption += bands_caption(l.bands);
+        if (!l.bands.empty())
+          f.caption += " (those of <code>" + html_escape(l.run->scheme) + "</code>)";
+      }
+      break;
+    }
   const std::string none = "no run got far enough to record a history";
   for (auto& f : figs)
     if (f.series.empty()) f.note = none;
@@ -210,6 +284,10 @@ void write_comparison(const std::string& dir, const ReportInfo& info,
       files.push_back(r.folder + "/report.html");
   html += page_foot(files);
   write_atomically((folder / "compare.html").string(), html, "comparison");
+  Json j;
+  j["scene"] = info.scene_name;
+  j["runs"] = verdicts;
+  write_atomically((folder / "compare.json").string(), j.dump(2) + "\n", "comparison");
 }
 
 }  // namespace emdae

@@ -26,6 +26,16 @@ struct Series {
   std::string label;
   std::vector<double> t, y;  // t: the abscissa
   bool dashed = false;       // a guide (e.g. a slope), drawn dashed in grey
+  bool points_only = false;  // marks without a line (e.g. the steps after a cut-back)
+  int marker = -1;           // gnuplot point type; -1: a filled circle with lines or points
+  double marker_size = 0.8;
+  int dash = 1;  // gnuplot dash type of the line (1 solid)
+};
+
+/// A shaded interval of the time axis: a contact window or a load interval.
+struct Band {
+  double t0 = 0.0, t1 = 0.0;
+  std::string kind;  // "contact" or "load"
 };
 
 /// The y axis: linear, logarithmic (errors), or steps (counts).
@@ -40,9 +50,10 @@ struct Figure {
   std::string caption;
   std::string note;  // shown instead of a plot when there is nothing to draw
   std::string xlabel = "t";
-  bool log_x = false;      // logarithmic x axis (non-positive x are left out)
-  bool points = false;     // mark each data point (few points: a study's runs)
-  bool from_zero = false;  // linear y axis from zero (a nearly uniform pressure looks flat)
+  bool log_x = false;            // logarithmic x axis (non-positive x are left out)
+  bool points = false;           // mark each data point (few points: a study's runs)
+  bool from_zero = false;        // linear y axis from zero (a nearly uniform pressure looks flat)
+  std::vector<Band> bands = {};  // shaded behind the curves (time plots)
 };
 
 std::string html_escape(const std::string& s);
@@ -96,9 +107,17 @@ struct RunCurves {
   std::vector<Series> contact;  // active contact nodes, when recorded
   std::vector<Series> events;   // contact events (impacts, releases) per step
   std::vector<Series> penetration;
+  Series dt;             // the step that led to each state
+  Series cutback_steps;  // dt of the steps accepted after a cut-back
 };
 
 RunCurves derive_curves(const Table& h);
+
+/// The contact windows (rows with active contact nodes) and load intervals
+/// (rows over which the external work changes) of a history.
+std::vector<Band> history_bands(const Table& h);
+/// The caption's sentence on the shading, "" without bands.
+std::string bands_caption(const std::vector<Band>& bands);
 
 // Which momentum errors a run's summary reports (the others are not
 // conserved by its system), and why not.

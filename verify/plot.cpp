@@ -150,7 +150,7 @@ Series reduce(const Series& s, bool keep_max) {
   const std::size_t n = s.t.size();
   if (n <= kMaxPoints) return s;
   const std::size_t k = (n + kMaxPoints - 1) / kMaxPoints;
-  Series r{s.label, {}, {}, s.dashed};
+  Series r{s.label, {}, {}, s.dashed, s.points_only, s.marker, s.marker_size, s.dash};
   for (std::size_t b = 0; b < n; b += k) {
     const std::size_t e = std::min(n, b + k);
     double y = s.y[b];
@@ -242,6 +242,37 @@ std::string log_x_tics(const Figure& fig, double lo, double hi) {
   return out + "set xtics (" + tics + ")\n";
 }
 
+const char* band_colour(const std::string& kind) {
+  return kind == "load" ? "#8ecae6" : "#f4a261";
+}
+
+// The bands of a figure as SVG rectangles behind the grid and the curves,
+// placed where gnuplot reports its plot area and x range (`area`: the
+// terminal's xmin xmax ymin ymax (from the bottom), its height, and the
+// axis' xmin xmax). Each keeps its interval in data-t0 and data-t1.
+std::string add_bands(std::string svg, const Figure& fig, const std::string& area) {
+  if (fig.bands.empty()) return svg;
+  std::istringstream in(area);
+  double px0 = 0, px1 = 0, py0 = 0, py1 = 0, height = 0, x0 = 0, x1 = 0;
+  if (!(in >> px0 >> px1 >> py0 >> py1 >> height >> x0 >> x1) || !(x1 > x0)) return svg;
+  const std::size_t at = svg.find("</defs>");
+  if (at == std::string::npos) return svg;
+  std::string rects = "\n<g class=\"bands\">\n";
+  for (const auto& b : fig.bands) {
+    const double a = std::max(b.t0, x0), c = std::min(b.t1, x1);
+    if (c < a) continue;
+    const double left = px0 + (a - x0) / (x1 - x0) * (px1 - px0);
+    // An interval within one step still shows: at least a pixel wide.
+    const double width = std::max(1.0, (c - a) / (x1 - x0) * (px1 - px0));
+    rects += fmt::format(
+        "<rect class=\"band {}\" data-t0=\"{:.17g}\" data-t1=\"{:.17g}\" x=\"{:.2f}\" "
+        "y=\"{:.2f}\" width=\"{:.2f}\" height=\"{:.2f}\" fill=\"{}\" fill-opacity=\"0.25\"/>\n",
+        b.kind, b.t0, b.t1, left, height - py1, width, py1 - py0, band_colour(b.kind));
+  }
+  svg.insert(at + 7, rects + "</g>\n");
+  return svg;
+}
+
 Plot draw(const Figure& fig, const ScratchFolder& scratch) {
   Plot plot;
   const bool log = fig.axis == Axis::Log;
@@ -270,12 +301,18 @@ Plot draw(const Figure& fig, const ScratchFolder& scratch) {
       y_hi = std::max(y_hi, y);
     }
     if (!data) return {"", "cannot write gnuplot data to the scratch folder"};
-    const std::string style = s.dashed ? "lines dt 2 lw 1.2 lc rgb '#555555'"
-                                       : fmt::format("{} lw 1.6 lc rgb '{}'",
-                                                     fig.axis == Axis::Steps ? "steps"
-                                                     : fig.points ? "linespoints pt 7 ps 0.7"
-                                                                  : "lines",
-                                                     kColours[colour++ % std::size(kColours)]);
+    const int pt = s.marker >= 0 ? s.marker : 7;
+    const std::string style =
+        s.dashed ? "lines dt 2 lw 1.2 lc rgb '#555555'"
+        : s.points_only
+            ? fmt::format("points pt {} ps 0.9 lc rgb '{}'", pt,
+                          kColours[colour++ % std::size(kColours)])
+            : fmt::format("{} lw 1.6 dt {} lc rgb '{}'",
+                          fig.axis == Axis::Steps ? "steps"
+                          : fig.points || s.marker >= 0
+                              ? fmt::format("linespoints pt {} ps {}", pt, s.marker_size)
+                              : std::string("lines"),
+                          s.dash, kColours[colour++ % std::size(kColours)]);
     plots += fmt::format("{}{} using 1:2 with {} title {} noenhanced", plots.empty() ? "" : ", ",
                          gp_quote((scratch / data_name).string()), style, gp_quote(s.label));
   }
@@ -291,6 +328,15 @@ Plot draw(const Figure& fig, const ScratchFolder& scratch) {
     y_lo = std::min(y_lo, *fig.limit);
     y_hi = std::max(y_hi, *fig.limit);
   }
+
+  // The shading's key entries (the rectangles themselves are added to the
+  // SVG afterwards, where gnuplot reports the plot area: see add_bands).
+  for (const auto& [kind, label] : {std::pair<std::string, std::string>{"load", "load interval"},
+                                    {"contact", "contact window"}})
+    if (std::any_of(fig.bands.begin(), fig.bands.end(),
+                    [&kind = kind](const Band& b) { return b.kind == kind; }))
+      plots += fmt::format(", NaN with boxes fs solid 0.25 noborder lc rgb '{}' title {}",
+                           band_colour(kind), gp_quote(label));
 
   std::string range;
   if (log) {
@@ -329,7 +375,10 @@ Plot draw(const Figure& fig, const ScratchFolder& scratch) {
            << "set grid lc rgb '#dddddd' lt 1 dt 1\n"
            << "set key outside top center horizontal noenhanced\n"
            << fmt::format("set xrange [{:.17g}:{:.17g}]\n", t_lo, t_hi)
-           << log_x_tics(fig, t_lo, t_hi) << range << "plot " << plots << "\n";
+           << log_x_tics(fig, t_lo, t_hi) << range << "plot " << plots << "\n"
+           << "set print " << gp_quote((scratch / (fig.id + ".area")).string()) << "\n"
+           << "print GPVAL_TERM_XMIN, GPVAL_TERM_XMAX, GPVAL_TERM_YMIN, GPVAL_TERM_YMAX, "
+              "640.0 * GPVAL_TERM_YSIZE / GPVAL_TERM_XSIZE, GPVAL_X_MIN, GPVAL_X_MAX\n";
     if (!script) return {"", "cannot write the gnuplot script to the scratch folder"};
   }
   std::string why;
@@ -340,7 +389,8 @@ Plot draw(const Figure& fig, const ScratchFolder& scratch) {
     if (message.size() > 600) message = message.substr(0, 600) + " ...";
     return {"", why.empty() ? fmt::format("gnuplot failed (exit {}): {}", rc, message) : why};
   }
-  plot.svg = inline_svg(read_text(svg_path), fig);
+  plot.svg =
+      inline_svg(add_bands(read_text(svg_path), fig, read_text(scratch / (fig.id + ".area"))), fig);
   if (plot.svg.empty()) plot.error = "gnuplot wrote no SVG";
   return plot;
 }

@@ -12,6 +12,7 @@
 #include <stdexcept>
 
 #include "verify/page.hpp"
+#include "verify/snapshots.hpp"
 
 namespace emdae {
 
@@ -132,7 +133,71 @@ RunCurves derive_curves(const Table& h) {
   c.newton = per_step("Newton iterations", col("newton_iterations"));
   const auto* cut = h.column("cutbacks");
   c.cutbacks = per_step("cut-backs", cut ? *cut : zeros_like(n));
+  c.dt = per_step("step size", col("dt"));
+  c.cutback_steps = Series{"step after a cut-back", {}, {}};
+  c.cutback_steps.points_only = true;
+  c.cutback_steps.marker = 9;  // a downward triangle: the step was cut
+  for (std::size_t i = 0; i < c.cutbacks.t.size() && i < c.dt.y.size(); ++i)
+    if (c.cutbacks.y[i] > 0) {
+      c.cutback_steps.t.push_back(c.cutbacks.t[i]);
+      c.cutback_steps.y.push_back(c.dt.y[i]);
+    }
   return c;
+}
+
+std::vector<Band> history_bands(const Table& h) {
+  std::vector<Band> bands;
+  const auto* t = h.column("t");
+  if (!t || t->empty()) return bands;
+  // Load intervals: rows over which the loads did work.
+  if (const auto* w = h.column("external_work")) {
+    for (std::size_t i = 1; i < t->size(); ++i) {
+      if ((*w)[i] == (*w)[i - 1]) continue;
+      if (!bands.empty() && bands.back().kind == "load" && bands.back().t1 == (*t)[i - 1])
+        bands.back().t1 = (*t)[i];
+      else
+        bands.push_back({(*t)[i - 1], (*t)[i], "load"});
+    }
+  }
+  // Contact windows: from the first to the last row of each run of rows
+  // with active contact nodes (the recorder's contact_window).
+  // The active set of an impact can empty for a few steps while the bodies
+  // are still together: contact_gap_continues (verify/snapshots.hpp) says
+  // when a window goes on, as for the drawings of the bodies.
+  if (const auto* a = h.column("active_contacts")) {
+    bool open = false;
+    Band* window = nullptr;
+    for (std::size_t i = 0; i < t->size(); ++i) {
+      if ((*a)[i] > 0) {
+        if (!open) {
+          if (!window ||
+              !contact_gap_continues(window->t0, window->t1, (*t)[i], t->back() - t->front())) {
+            bands.push_back({(*t)[i], (*t)[i], "contact"});
+            window = &bands.back();
+          }
+        }
+        open = true;
+        window->t1 = (*t)[i];
+      } else {
+        open = false;
+      }
+    }
+  }
+  return bands;
+}
+
+std::string bands_caption(const std::vector<Band>& bands) {
+  const auto has = [&bands](const char* kind) {
+    return std::any_of(bands.begin(), bands.end(),
+                       [kind](const Band& b) { return b.kind == kind; });
+  };
+  std::string out;
+  if (has("contact")) out += " Shaded orange: contact windows (active contact nodes).";
+  if (has("load"))
+    out +=
+        " Shaded blue: load intervals (the loads do work); the energy check holds over "
+        "the rest.";
+  return out;
 }
 // --- HTML -----------------------------------------------------------------------------------
 
@@ -165,6 +230,16 @@ table.compare td { max-width: 320px; }
 .mark.pass { color: var(--pass); }
 .mark.fail { color: var(--fail); }
 .mark.skipped { color: var(--muted); font-weight: 400; }
+.mark.warn { color: #b26a00; }
+ul.verdicts { list-style: none; padding: 0; margin: 6px 0; }
+ul.verdicts li { padding: 3px 0; }
+.snapshots { display: grid; grid-template-columns: repeat(auto-fill, minmax(280px, 1fr));
+             gap: 12px 18px; }
+.snapshots figure { border: 1px solid var(--line); border-radius: 4px; padding: 6px; }
+svg.snapshot { width: 100%; height: auto; display: block; }
+svg.legend { width: 100%; max-width: 620px; height: auto; display: block; margin: 4px 0 8px; }
+svg.animation { width: 100%; max-width: 640px; height: auto; display: block;
+                border: 1px solid var(--line); border-radius: 4px; }
 table.compare td div { white-space: nowrap; }
 .note { color: var(--muted); font-style: italic; }
 .warning { border-left: 4px solid #e0a800; background: #fff8e1; padding: 8px 12px; }
@@ -314,13 +389,43 @@ std::vector<Figure> run_figures(const RunCurves& c, const Summary& summary,
                                 "attempts (cut-backs) before it."
                               : "Newton iterations of each accepted step (no cut-backs).",
                   ""});
+  {
+    std::vector<Series> steps = {c.dt};
+    if (!c.cutback_steps.t.empty()) steps.push_back(c.cutback_steps);
+    Figure dt{"step-size",
+              "Step size",
+              "dt",
+              Axis::Log,
+              steps,
+              std::nullopt,
+              "The step that led to each state (history.csv's dt: a step split at located "
+              "impacts counts whole; a step cut back when Newton fails is the shorter one "
+              "accepted)",
+              ""};
+    dt.caption += c.cutback_steps.t.empty()
+                      ? "; no step was cut back."
+                      : fmt::format("; triangles: the {} steps accepted after a cut-back.",
+                                    c.cutback_steps.t.size());
+    figs.push_back(dt);
+  }
   if (!c.contact.empty())
     figs.push_back({"contact", "Active contact nodes", "nodes", Axis::Steps, c.contact,
                     std::nullopt, "Slave nodes in the active set after each step.", ""});
-  if (!c.events.empty())
-    figs.push_back(
-        {"contact-events", "Contact events", "per step", Axis::Steps, c.events, std::nullopt,
-         "Impacts located (the step is split there) and releases within each step.", ""});
+  if (!c.events.empty()) {
+    Figure ev{"contact-events",
+              "Contact events",
+              "per step",
+              Axis::Steps,
+              c.events,
+              std::nullopt,
+              "Impacts located (the step is split there) and releases within each step.",
+              ""};
+    if (std::all_of(c.events.begin(), c.events.end(), [](const Series& s) {
+          return std::all_of(s.y.begin(), s.y.end(), [](double y) { return y == 0.0; });
+        }))
+      ev.note = "no contact event (impact located or release) in any step";
+    figs.push_back(ev);
+  }
   if (!c.penetration.empty())
     figs.push_back({"penetration", "Penetration", "depth", Axis::Log, c.penetration, std::nullopt,
                     "Deepest penetration of an inactive slave node." + floor_caption(true), ""});
@@ -409,8 +514,11 @@ std::optional<Figure> pressure_figure(const fs::path& path) {
   const auto at = [&](const char* name) {
     return static_cast<std::size_t>(std::find(names.begin(), names.end(), name) - names.begin());
   };
-  const std::size_t pair = at("pair"), x = at("x"), p = at("pressure");
-  if (pair >= names.size() || x >= names.size() || p >= names.size()) return std::nullopt;
+  const std::size_t pair = at("pair"), x = at("x"), y = at("y"), p = at("pressure");
+  if (pair >= names.size() || x >= names.size() || y >= names.size() || p >= names.size())
+    return std::nullopt;
+  // Each pair's last node, to measure the arc length from.
+  std::vector<std::pair<double, double>> last;
   std::vector<Series> series;
   while (std::getline(in, line)) {
     if (!line.empty() && line.back() == '\r') line.pop_back();
@@ -420,9 +528,17 @@ std::optional<Figure> pressure_figure(const fs::path& path) {
                            [&](const Series& s) { return s.label == cells[pair]; });
     if (it == series.end()) {
       series.push_back({cells[pair], {}, {}});
+      last.emplace_back(0.0, 0.0);
       it = series.end() - 1;
     }
-    it->t.push_back(std::strtod(cells[x].c_str(), nullptr));
+    // Rows run along the slave surface: the arc length is the sum of the
+    // distances between successive active nodes (from the first of them).
+    auto& [px, py] = last[static_cast<std::size_t>(it - series.begin())];
+    const double nx = std::strtod(cells[x].c_str(), nullptr);
+    const double ny = std::strtod(cells[y].c_str(), nullptr);
+    it->t.push_back(it->t.empty() ? 0.0 : it->t.back() + std::hypot(nx - px, ny - py));
+    px = nx;
+    py = ny;
     it->y.push_back(std::strtod(cells[p].c_str(), nullptr));
   }
   Figure fig{"contact-pressure",
@@ -432,12 +548,40 @@ std::optional<Figure> pressure_figure(const fs::path& path) {
              std::move(series),
              std::nullopt,
              "p<sub>A</sub> = &minus;&lambda;<sub>A</sub> / w<sub>A</sub> at each active slave "
-             "node of the last state, against its x (contact.csv).",
+             "node of the last state, along the slave surface: against the arc length s through "
+             "the active nodes in their order on the surface, from the first (contact.csv).",
              ""};
-  fig.xlabel = "x";
+  fig.xlabel = "arc length s along the slave surface";
   fig.points = true;
   fig.from_zero = true;
   if (fig.series.empty()) fig.note = "no active contact node at the end";
+  return fig;
+}
+
+// The pressure along each slave surface at the drawn states of the bodies
+// (verify/snapshots.hpp), or nothing when no drawn state has contact.
+std::optional<Figure> surface_pressure_figure(const BodySnapshots& bodies) {
+  const auto profiles = surface_pressures(bodies);
+  if (profiles.empty()) return std::nullopt;
+  Figure fig{"contact-pressure",
+             "Contact pressure along the slave surface",
+             "pressure",
+             Axis::Linear,
+             {},
+             std::nullopt,
+             "p<sub>A</sub> = &minus;&lambda;<sub>A</sub> / w<sub>A</sub> at the slave nodes "
+             "against the arc length s along the deformed surface (from two nodes before the "
+             "stretch that is ever active), at the drawn states of the bodies and at a few "
+             "more within the contact windows; zero where a node is not in contact.",
+             ""};
+  const bool several = std::any_of(profiles.begin(), profiles.end(),
+                                   [&](const auto& p) { return p.body != profiles[0].body; });
+  for (const auto& p : profiles)
+    fig.series.push_back(
+        {fmt::format("{}t = {:.4g}", several ? p.body + ", " : "", p.t), p.s, p.p});
+  fig.xlabel = "arc length s along the slave surface";
+  fig.points = true;
+  fig.from_zero = true;
   return fig;
 }
 
@@ -573,8 +717,7 @@ void write_report(const std::string& dir, const ReportInfo& info, const Summary&
   }
   html += checks_html(json) + "</section>\n";
 
-  html += "<section id=\"scheme\">\n<h2>Scheme and settings</h2>\n" + settings_html(info) +
-          "</section>\n";
+  if (info.bodies) html += snapshots_html(*info.bodies);
 
   html += "<section id=\"history\">\n<h2>History</h2>\n";
   std::vector<Figure> figures;
@@ -588,9 +731,19 @@ void write_report(const std::string& dir, const ReportInfo& info, const Summary&
           curves, summary,
           check_limit(json, curves.energy_balance ? "energy_balance_rel" : "energy_rel"),
           check_limit(json, "constraint"));
+      const std::vector<Band> bands = history_bands(table);
+      for (auto& f : figures) {
+        f.bands = bands;
+        if (f.note.empty()) f.caption += bands_caption(bands);
+      }
     }
+    // The pressure along the surface through the impacts, from the drawn
+    // states; the last state's (contact.csv) when there are none.
+    std::optional<Figure> profile;
+    if (info.bodies && !summary.static_analysis) profile = surface_pressure_figure(*info.bodies);
+    if (profile) figures.push_back(std::move(*profile));
     // The pressure is what a static contact analysis is for: its figure first.
-    if (auto pressure = pressure_figure(folder / "contact.csv"))
+    else if (auto pressure = pressure_figure(folder / "contact.csv"))
       figures.insert(summary.static_analysis ? figures.begin() : figures.end(),
                      std::move(*pressure));
     html += fmt::format(
@@ -604,6 +757,10 @@ void write_report(const std::string& dir, const ReportInfo& info, const Summary&
     html += "<p class=\"warning\">No plots: " + html_escape(e.what()) + "</p>\n";
   }
   html += "</section>\n";
+
+  // The settings after the figures: the page opens with what the run did.
+  html += "<section id=\"scheme\">\n<h2>Scheme and settings</h2>\n" + settings_html(info) +
+          "</section>\n";
 
   html +=
       "<section id=\"summary\">\n<h2>Summary</h2>\n" + summary_table_html(json) + "</section>\n";

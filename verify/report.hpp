@@ -30,6 +30,8 @@
 
 namespace emdae {
 
+struct BodySnapshots;  // verify/snapshots.hpp
+
 /// What the report says about the run besides its history and summary.
 struct ReportInfo {
   std::string scene_name;
@@ -41,6 +43,9 @@ struct ReportInfo {
   std::vector<std::pair<std::string, std::string>> settings;
   /// Other files of the run worth a link (relative to the report).
   std::vector<std::string> files;
+  /// The bodies' states kept by the run (verify/snapshots.hpp), drawn in
+  /// the report; null or empty: no such section.
+  const BodySnapshots* bodies = nullptr;
 };
 
 /// Writes `dir`/report.html from `dir`/history.csv and `summary`. Throws

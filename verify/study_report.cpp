@@ -72,6 +72,29 @@ void add_slope_guide(Figure& fig, double slope, const std::string& label) {
   fig.series.push_back(guide);
 }
 
+// Schemes that agree draw on top of each other: each gets its own open
+// marker, size and dash, largest first, so that every one stays visible.
+void style_scheme(Series& s, const std::string& scheme) {
+  struct Style {
+    const char* scheme;
+    int marker;
+    double size;
+    int dash;
+  };
+  static const Style styles[] = {
+      {"em", 6, 1.7, 1}, {"midpoint", 4, 1.2, 2}, {"galpha", 8, 1.0, 4}, {"ida", 12, 1.3, 5}};
+  for (const auto& st : styles)
+    if (scheme == st.scheme) {
+      s.marker = st.marker;
+      s.marker_size = st.size;
+      s.dash = st.dash;
+      return;
+    }
+  s.marker = 10;
+  s.marker_size = 0.9;
+  s.dash = 3;
+}
+
 std::vector<Figure> study_figures(const Study& study) {
   Figure by_dt{"error-dt",
                "Error at t_end against the step size",
@@ -106,9 +129,34 @@ std::vector<Figure> study_figures(const Study& study) {
                 "CPU seconds",
                 true,
                 true};
+  Figure energy{"energy-dt",
+                "Energy error against the step size",
+                "max relative energy error",
+                Axis::Log,
+                {},
+                std::nullopt,
+                "",
+                "",
+                "dt",
+                true,
+                true};
+  energy.caption =
+      "Each run's energy_rel_error_max (over load-free intervals) against its step size, one "
+      "line per scheme (ida chooses its own steps: not drawn); schemes that agree are drawn with "
+      "different open markers so that each stays visible." +
+      floor_caption(true) + " Failed runs are not drawn.";
   bool any_ida = false, any_dt = false;
   for (const auto& scheme : study.schemes) {
-    Series against_axis{scheme, {}, {}}, against_cpu{scheme, {}, {}};
+    Series against_axis{scheme, {}, {}}, against_cpu{scheme, {}, {}}, against_dt{scheme, {}, {}};
+    for (Series* s : {&against_axis, &against_cpu, &against_dt}) style_scheme(*s, scheme);
+    for (const auto& r : study.runs) {
+      if (r.scheme != scheme || !r.ok() || r.reference || r.reference_check) continue;
+      if (scheme != "ida" && std::isfinite(r.energy_rel_error_max)) {
+        against_dt.t.push_back(r.axis());
+        against_dt.y.push_back(r.energy_rel_error_max);
+      }
+    }
+    if (!against_dt.t.empty()) energy.series.push_back(against_dt);
     for (const auto& r : study.runs) {
       if (r.scheme != scheme || !r.ok() || !std::isfinite(r.error)) continue;
       against_axis.t.push_back(r.axis());
@@ -157,6 +205,10 @@ std::vector<Figure> study_figures(const Study& study) {
   }
   if (by_cpu.series.empty()) by_cpu.note = none;
   figs.push_back(by_cpu);
+  if (has_dt_scheme) {
+    if (energy.series.empty()) energy.note = none;
+    figs.push_back(energy);
+  }
   return figs;
 }
 
