@@ -35,6 +35,7 @@ constexpr const char* kExitCodesHelp =
 
 // Every option that takes a value refuses an empty one: --dt '' must not
 // read as "not given" (CLI11 would accept it, and the default would run).
+// The lists of study (--dts, --tols, --times, --measures) say it themselves.
 const CLI::Validator kNotEmpty(
     [](std::string& value) {
       return value.empty() ? std::string("an empty value is not allowed") : std::string();
@@ -167,15 +168,13 @@ int emdae_main(int argc, char** argv) {
           ->add_option("--dts", study_dts,
                        "Comma-separated step sizes of em, midpoint and galpha (default: the "
                        "scene's dt x 4, 2, 1, 1/2)")
-          ->type_name("H,H,...")
-          ->check(kNotEmpty);
+          ->type_name("H,H,...");
   CLI::Option* tols_option =
       study
           ->add_option("--tols", study_tols,
                        "Comma-separated tolerances of ida, rtol = atol, each in (0, 1); its "
                        "output interval is the scene's dt (default: 1e-4,1e-6,1e-8)")
-          ->type_name("TOL,...")
-          ->check(kNotEmpty);
+          ->type_name("TOL,...");
   study
       ->add_option("--reference-dt", study_options.reference_dt,
                    "Step of the reference run, scheme em (default: the smallest of --dts / 8)")
@@ -187,15 +186,13 @@ int emdae_main(int argc, char** argv) {
                        "Comma-separated times in (0, t_end] at which positions are compared "
                        "(default: before, during and after the reference's contact window, or "
                        "the middle of the run, and t_end)")
-          ->type_name("T,T,...")
-          ->check(kNotEmpty);
+          ->type_name("T,T,...");
   CLI::Option* measures_option =
       study
           ->add_option("--measures", study_measures,
                        "Comma-separated measures among positions, window, momenta, energy "
                        "(default: all that apply; window needs [[contacts]])")
-          ->type_name("NAME,...")
-          ->check(kNotEmpty);
+          ->type_name("NAME,...");
   study->add_flag("--no-reference-check", study_no_check,
                   "No reference check: the second reference run, em at twice "
                   "--reference-dt, whose difference from the reference estimates the "
