@@ -112,6 +112,9 @@ int run_scene(const RunOptions& options, std::ostream& out, std::ostream& err, R
   settings.checkpoint_every = options.checkpoint_every;
   settings.resume = !options.resume_dir.empty();
   if (options.checkpoint_every > 0) settings.resume_note = resume_note(options);
+  if (options.checkpoint_every > 0 && settings.static_only)
+    fmt::print(err,
+               "emdae: warning: --checkpoint-every: a static analysis writes no checkpoints\n");
   ConsoleObserver observer(err, options.quiet, options.progress_label);
   RunResult result;
   try {
