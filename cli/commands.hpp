@@ -23,7 +23,7 @@ namespace emdae {
 /// Exit codes of the emdae command (also listed in `emdae --help`).
 enum ExitCode : int {
   kExitOk = 0,
-  kExitInternal = 1,      // a bug or an unexpected system error
+  kExitInternal = 1,      // a bug or an unexpected system error (a full disk)
   kExitBadInput = 2,      // scene file or command line; nothing was written
   kExitRunFailed = 3,     // the integration failed; history and summary kept
   kExitChecksFailed = 4,  // the run finished but a [tolerances] check failed
@@ -38,6 +38,9 @@ struct RunOptions {
   std::string out_dir;                 // empty: out/<scene name>-<scheme>
   std::vector<std::string> overrides;  // "key=value"
   bool quiet = false;
+  bool force = false;          // reuse an output folder holding files emdae did not write
+  long checkpoint_every = 0;   // --checkpoint-every N: a checkpoint every N steps
+  std::string resume_dir;      // --resume DIR: go on from DIR's checkpoint
   std::string progress_label;  // shown before the progress bar (compare: the scheme)
 };
 
@@ -49,6 +52,7 @@ struct CompareOptions {
   std::vector<std::string> overrides;
   bool quiet = false;
   bool strict = false;  // a missed [tolerances] check exits 4 (otherwise 0)
+  bool force = false;
 };
 
 struct StudyOptions {

@@ -51,6 +51,7 @@ int command_compare(const CompareOptions& options, std::ostream& out, std::ostre
     run.overrides = options.overrides;
     run.out_dir = (fs::path(dir) / scheme).string();
     run.quiet = options.quiet;
+    run.force = options.force;
     run.progress_label = scheme + " ";
     RunRecord record;
     // One table for all schemes at the end, not one per run.

@@ -23,19 +23,31 @@ std::string known_list() {
 constexpr const char* kExitCodesHelp =
     "Exit codes:\n"
     "  0    success\n"
-    "  1    internal error\n"
+    "  1    internal error, or the output could not be written whole (a full disk)\n"
     "  2    bad input (scene file or command line); no output is created\n"
     "  3    the run failed numerically; history.csv and summary.json are kept and\n"
     "       the summary's status says what failed\n"
     "  4    the run finished but a [tolerances] check of the scene failed\n"
-    "  130  interrupted (Ctrl-C); history and summary are kept\n"
+    "  130  interrupted (Ctrl-C, also in a static analysis); history and summary are kept\n"
     "\n"
     "Without arguments emdae runs its built-in default scene (the paper's two-ring\n"
     "impact, examples/ring_impact.toml) with scheme em and writes out/default/.";
 
+// Every option that takes a value refuses an empty one: --dt '' must not
+// read as "not given" (CLI11 would accept it, and the default would run).
+// The lists of study (--dts, --tols, --times, --measures) say it themselves.
+const CLI::Validator kNotEmpty(
+    [](std::string& value) {
+      return value.empty() ? std::string("an empty value is not allowed") : std::string();
+    },
+    "", "not empty");
+
 // The options several subcommands share, with one wording.
 void scene_argument(CLI::App* c, std::string& path) {
-  c->add_option("scene", path, "Scene file (TOML)")->required()->type_name("FILE");
+  c->add_option("scene", path, "Scene file (TOML)")
+      ->required()
+      ->type_name("FILE")
+      ->check(kNotEmpty);
 }
 
 void schemes_option(CLI::App* c, std::string& schemes, const char* verb) {
@@ -43,25 +55,34 @@ void schemes_option(CLI::App* c, std::string& schemes, const char* verb) {
        "--schemes", schemes,
        std::string("Comma-separated schemes to ") + verb + " (known: " + known_list() + ")")
       ->required()
-      ->type_name("A,B,...");
+      ->type_name("A,B,...")
+      ->check(kNotEmpty);
 }
 
 void dt_option(CLI::App* c, std::string& dt) {
-  c->add_option("--dt", dt, "Time step, overriding the scene's time.dt")->type_name("X");
+  c->add_option("--dt", dt, "Time step, overriding the scene's time.dt")
+      ->type_name("X")
+      ->check(kNotEmpty);
 }
 
 void t_end_option(CLI::App* c, std::string& t_end) {
-  c->add_option("--t-end", t_end, "End time, overriding the scene's time.t_end")->type_name("T");
+  c->add_option("--t-end", t_end, "End time, overriding the scene's time.t_end")
+      ->type_name("T")
+      ->check(kNotEmpty);
 }
 
 void out_option(CLI::App* c, std::string& dir, const char* default_folder) {
   c->add_option("--out", dir, std::string("Output folder (default: ") + default_folder + ")")
-      ->type_name("DIR");
+      ->type_name("DIR")
+      ->check(kNotEmpty);
 }
 
 void set_option(CLI::App* c, std::vector<std::string>& assignments,
                 const char* help = "Override a scene value (as for run)") {
-  c->add_option("--set", assignments, help)->allow_extra_args(false)->type_name("KEY=VALUE");
+  c->add_option("--set", assignments, help)
+      ->allow_extra_args(false)
+      ->type_name("KEY=VALUE")
+      ->check(kNotEmpty);
 }
 
 }  // namespace
@@ -81,10 +102,14 @@ int emdae_main(int argc, char** argv) {
                                      "Run one scene with one scheme; write a history "
                                      "(history.csv), a summary (summary.json) and a "
                                      "report (report.html).");
-  scene_argument(run, run_options.scene_path);
+  // Not required: --resume DIR takes the scene from DIR's checkpoint.
+  run->add_option("scene", run_options.scene_path, "Scene file (TOML)")
+      ->type_name("FILE")
+      ->check(kNotEmpty);
   run->add_option("--scheme", run_options.scheme,
                   "Time-stepping scheme, overriding the scene's (known: " + known_list() + ")")
-      ->type_name("NAME");
+      ->type_name("NAME")
+      ->check(kNotEmpty);
   dt_option(run, run_options.dt);
   t_end_option(run, run_options.t_end);
   out_option(run, run_options.out_dir, "out/<scene name>-<scheme>");
@@ -92,6 +117,20 @@ int emdae_main(int argc, char** argv) {
              "Override a scene value, e.g. --set time.dt=0.005 or "
              "--set 'particles[0].mass=2' (repeatable)");
   run->add_flag("-q,--quiet", run_options.quiet, "No progress lines and no summary table");
+  run->add_option("--checkpoint-every", run_options.checkpoint_every,
+                  "Write the whole state of the run to DIR/checkpoint/ every N steps "
+                  "(atomically), to go on with --resume after a crash or a kill")
+      ->type_name("N")
+      ->check(CLI::Range(1L, 1'000'000'000'000L));
+  run->add_option("--resume", run_options.resume_dir,
+                  "Go on from the checkpoint in output folder DIR (the same scene, options and "
+                  "--out; no other option but -q): history and summary end as an uninterrupted "
+                  "run's")
+      ->type_name("DIR")
+      ->check(kNotEmpty);
+  run->add_flag("--force", run_options.force,
+                "Run into an output folder that holds files emdae did not write (they are "
+                "kept; an earlier run's output is always replaced)");
   run->footer(kExitCodesHelp);
 
   CompareOptions compare_options;
@@ -109,6 +148,8 @@ int emdae_main(int argc, char** argv) {
   compare->add_flag("--strict", compare_options.strict,
                     "Exit 4 when a scheme misses a [tolerances] check of the scene (without it "
                     "a comparison whose runs all finished exits 0)");
+  compare->add_flag("--force", compare_options.force,
+                    "Run into output folders that hold files emdae did not write");
   compare->footer(std::string(kExitCodesHelp) +
                   "\n\ncompare exits 0 when every run finished, whatever the [tolerances] "
                   "verdicts\n(each scheme's verdict is in compare.html and compare.json; "
@@ -142,7 +183,8 @@ int emdae_main(int argc, char** argv) {
   study
       ->add_option("--reference-dt", study_options.reference_dt,
                    "Step of the reference run, scheme em (default: the smallest of --dts / 8)")
-      ->type_name("H");
+      ->type_name("H")
+      ->check(kNotEmpty);
   CLI::Option* times_option =
       study
           ->add_option("--times", study_times,
@@ -232,7 +274,13 @@ int emdae_main(int argc, char** argv) {
                  topic);
       return kExitBadInput;
     }
-    if (*run) return command_run(run_options, std::cout, std::cerr);
+    if (*run) {
+      if (run_options.scene_path.empty() && run_options.resume_dir.empty()) {
+        fmt::print(std::cerr, "emdae: error: run: a scene file is required (or --resume DIR)\n");
+        return kExitBadInput;
+      }
+      return command_run(run_options, std::cout, std::cerr);
+    }
     if (*check) return command_check(check_path, check_overrides, std::cout, std::cerr);
     if (*compare) return command_compare(compare_options, std::cout, std::cerr);
     if (*study) {

@@ -135,13 +135,17 @@ class Progress {
 };
 
 ConsoleObserver::ConsoleObserver(std::ostream& err, bool quiet, std::string label)
-    : err_(err), quiet_(quiet), label_(std::move(label)) {}
+    : err_(err), quiet_(quiet), label_(std::move(label)) {
+  // From the start, not from the time loop's: Ctrl-C during a static
+  // analysis (or the equilibrium before a dynamic run) stops the run between
+  // load increments, keeping history and summary.
+  signals_ = std::make_unique<SignalGuard>();
+}
 
 ConsoleObserver::~ConsoleObserver() = default;
 
 void ConsoleObserver::started(double t_start, double t_end) {
   progress_ = std::make_unique<Progress>(err_, quiet_, t_start, t_end, label_);
-  signals_ = std::make_unique<SignalGuard>();
 }
 
 void ConsoleObserver::sampled(const State&, const Sample& sample, const Recorder& recorder) {

@@ -4,6 +4,8 @@
 
 #include <algorithm>
 #include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
 #include <sstream>
 
 #include "cli/command_support.hpp"
@@ -11,6 +13,24 @@
 #include "cli/progress.hpp"
 
 namespace emdae {
+
+namespace {
+
+// checkpoint/run.json: the command of a run with checkpoints, to resume it.
+std::string resume_note(const RunOptions& o) {
+  nlohmann::json j;
+  j["cwd"] = std::filesystem::current_path().string();
+  j["scene"] = o.scene_path;
+  j["scheme"] = o.scheme;
+  j["dt"] = o.dt;
+  j["t_end"] = o.t_end;
+  j["overrides"] = o.overrides;
+  j["out"] = o.out_dir;
+  j["checkpoint_every"] = o.checkpoint_every;
+  return j.dump(2) + "\n";
+}
+
+}  // namespace
 
 std::vector<SceneOverride> set_overrides(const std::vector<std::string>& assignments) {
   std::vector<SceneOverride> out;
@@ -88,6 +108,13 @@ int run_scene(const RunOptions& options, std::ostream& out, std::ostream& err, R
       options.out_dir.empty()
           ? "out/" + settings.name + "-" + (settings.static_only ? "static" : settings.scheme)
           : options.out_dir;
+  settings.force = options.force;
+  settings.checkpoint_every = options.checkpoint_every;
+  settings.resume = !options.resume_dir.empty();
+  if (options.checkpoint_every > 0) settings.resume_note = resume_note(options);
+  if (options.checkpoint_every > 0 && settings.static_only)
+    fmt::print(err,
+               "emdae: warning: --checkpoint-every: a static analysis writes no checkpoints\n");
   ConsoleObserver observer(err, options.quiet, options.progress_label);
   RunResult result;
   try {
@@ -110,11 +137,59 @@ int run_scene(const RunOptions& options, std::ostream& out, std::ostream& err, R
       if (c.result == "fail")
         fmt::print(err, "emdae: {}check {} failed\n", options.progress_label, c.name);
   if (code != kExitOk && code != kExitChecksFailed) fmt::print(err, "emdae: {}\n", summary.status);
+  // A file of the run that could not be written (a full disk) makes the
+  // output incomplete: not a success, whatever the run itself did.
+  if (!result.output_error.empty()) {
+    fmt::print(err, "emdae: error: output incomplete: {}\n", result.output_error);
+    if (code == kExitOk || code == kExitChecksFailed) code = kExitInternal;
+  }
   return code;
 }
 
+namespace {
+
+// `emdae run --resume DIR`: the run of DIR's checkpoint/run.json, from
+// its folder, going on from the checkpoint.
+int resume(const RunOptions& given, std::ostream& out, std::ostream& err, RunRecord& record) {
+  namespace fs = std::filesystem;
+  if (!given.scene_path.empty() || !given.scheme.empty() || !given.dt.empty() ||
+      !given.t_end.empty() || !given.out_dir.empty() || !given.overrides.empty() ||
+      given.checkpoint_every > 0 || given.force)
+    return bad_input(err, "--resume " + given.resume_dir +
+                              ": takes no scene and no option but -q (the run's own are in " +
+                              given.resume_dir + "/checkpoint/run.json)");
+  const fs::path note = fs::absolute(fs::path(given.resume_dir) / "checkpoint" / "run.json");
+  RunOptions o;
+  try {
+    std::ifstream in(note);
+    if (!in) throw std::runtime_error("no checkpoint (run with --checkpoint-every N to write one)");
+    const nlohmann::json j = nlohmann::json::parse(in);
+    o.scene_path = j.at("scene").get<std::string>();
+    o.scheme = j.at("scheme").get<std::string>();
+    o.dt = j.at("dt").get<std::string>();
+    o.t_end = j.at("t_end").get<std::string>();
+    o.overrides = j.at("overrides").get<std::vector<std::string>>();
+    o.out_dir = j.at("out").get<std::string>();
+    o.checkpoint_every = j.at("checkpoint_every").get<long>();
+    // Relative paths (scene, --out, meshes) as the run had them.
+    std::error_code ec;
+    fs::current_path(j.at("cwd").get<std::string>(), ec);
+    if (ec) throw std::runtime_error("cannot go to the run's folder: " + ec.message());
+  } catch (const std::exception& e) {
+    return bad_input(err, fmt::format("--resume {}: cannot read '{}': {}", given.resume_dir,
+                                      note.string(), e.what()));
+  }
+  o.quiet = given.quiet;
+  o.progress_label = given.progress_label;
+  o.resume_dir = given.resume_dir;
+  return run_scene(o, out, err, record);
+}
+
+}  // namespace
+
 int command_run(const RunOptions& options, std::ostream& out, std::ostream& err) {
   RunRecord record;
+  if (!options.resume_dir.empty()) return resume(options, out, err, record);
   return run_scene(options, out, err, record);
 }
 

@@ -7,3 +7,12 @@ if(EMDAE_SANITIZE)
   target_compile_options(emdae_options INTERFACE -fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-recover=undefined)
   target_link_options(emdae_options INTERFACE -fsanitize=address,undefined)
 endif()
+if(EMDAE_FUZZ)
+  # libFuzzer (clang): every emdae library instrumented for coverage, with
+  # ASan and UBSan; the fuzz targets (fuzz/) link the fuzzer's main.
+  if(NOT CMAKE_CXX_COMPILER_ID MATCHES "Clang")
+    message(FATAL_ERROR "EMDAE_FUZZ needs clang (cmake --preset fuzz uses clang++-14)")
+  endif()
+  target_compile_options(emdae_options INTERFACE -fsanitize=fuzzer-no-link,address,undefined -fno-omit-frame-pointer -fno-sanitize-recover=undefined)
+  target_link_options(emdae_options INTERFACE -fsanitize=address,undefined)
+endif()

@@ -1,8 +1,11 @@
 #include "core/gmsh_reader.hpp"
 
 #include <algorithm>
+#include <cstdint>
+#include <filesystem>
 #include <fstream>
 #include <map>
+#include <memory>
 #include <set>
 #include <sstream>
 #include <vector>
@@ -11,14 +14,47 @@ namespace emdae {
 
 namespace {
 
+// Larger than any planar mesh emdae can run (limits.max_memory_mb).
+constexpr std::uintmax_t kMaxMeshBytes = std::uintmax_t{1} << 30;
+
 // A line-oriented tokenizer that knows where it is, for messages.
 class Reader {
  public:
-  explicit Reader(const std::string& path) : path_(path), in_(path) {
-    if (!in_) throw MeshFileError(path + ": cannot open mesh file");
+  explicit Reader(const std::string& path) : path_(path) {
+    // Only a regular file, of a bounded size: a device (/dev/zero) never ends.
+    std::error_code ec;
+    const auto status = std::filesystem::status(path, ec);
+    if (std::filesystem::exists(status) && !std::filesystem::is_regular_file(status))
+      throw MeshFileError(path + ": not a regular file (a folder, device, pipe or socket)");
+    auto file = std::make_unique<std::ifstream>(path);
+    if (!*file) throw MeshFileError(path + ": cannot open mesh file");
+    size_ = std::filesystem::file_size(path, ec);
+    if (ec) throw MeshFileError(path + ": cannot read mesh file: " + ec.message());
+    if (size_ > kMaxMeshBytes)
+      throw MeshFileError(path + ": the mesh file has " + std::to_string(size_) +
+                          " bytes, more than the limit of " + std::to_string(kMaxMeshBytes));
+    in_ = std::move(file);
+  }
+  /// The text of a file named `name` (the fuzz target reads no files).
+  Reader(std::string_view text, const std::string& name) : path_(name) {
+    if (text.size() > kMaxMeshBytes)
+      throw MeshFileError(name + ": the mesh file has more than " + std::to_string(kMaxMeshBytes) +
+                          " bytes");
+    size_ = text.size();
+    in_ = std::make_unique<std::istringstream>(std::string(text));
+  }
+  /// A count of entries that follow, one line (two bytes) each at least: a
+  /// count the file's size cannot hold is refused before anything is allocated.
+  long count(std::istringstream& s, const char* what) const {
+    const long n = get<long>(s, what);
+    if (n < 0) fail(std::string("expected ") + what + ", received " + std::to_string(n));
+    if (static_cast<std::uintmax_t>(n) > size_ / 2)
+      fail(std::string(what) + " " + std::to_string(n) + " cannot be right: the file has only " +
+           std::to_string(size_) + " bytes");
+    return n;
   }
   bool next(std::string& line) {
-    if (!std::getline(in_, line)) return false;
+    if (!std::getline(*in_, line)) return false;
     ++line_no_;
     if (!line.empty() && line.back() == '\r') line.pop_back();
     return true;
@@ -40,8 +76,9 @@ class Reader {
 
  private:
   std::string path_;
-  std::ifstream in_;
-  int line_no_ = 0;
+  std::unique_ptr<std::istream> in_;
+  std::uintmax_t size_ = 0;
+  long line_no_ = 0;
 };
 
 struct Line2 {
@@ -51,8 +88,25 @@ struct Line2 {
 
 }  // namespace
 
+namespace {
+
+Mesh read(Reader& r, const std::string& path, const std::string& surface);
+
+}  // namespace
+
 Mesh read_gmsh(const std::string& path, const std::string& surface) {
   Reader r(path);
+  return read(r, path, surface);
+}
+
+Mesh read_gmsh_text(std::string_view text, const std::string& name, const std::string& surface) {
+  Reader r(text, name);
+  return read(r, name, surface);
+}
+
+namespace {
+
+Mesh read(Reader& r, const std::string& path, const std::string& surface) {
   std::map<std::pair<int, int>, std::string> physical_names;         // (dim, tag) -> name
   std::map<std::pair<int, int>, std::vector<int>> entity_physicals;  // (dim, entity) -> tags
   std::map<long, Eigen::Vector2d> nodes;
@@ -72,40 +126,42 @@ Mesh read_gmsh(const std::string& path, const std::string& surface) {
       format_seen = true;
     } else if (line == "$PhysicalNames") {
       auto f = r.next_fields("the number of physical names");
-      const int n = r.get<int>(f, "a count");
+      const long n = r.count(f, "a count of physical names");
       for (int i = 0; i < n; ++i) {
         auto p = r.next_fields("a physical name");
         const int dim = r.get<int>(p, "a dimension");
         const int tag = r.get<int>(p, "a tag");
         std::string name;
         std::getline(p, name);
-        name.erase(0, name.find('"') + 1);
-        name.erase(name.rfind('"'));
+        const auto open = name.find('"'), close = name.rfind('"');
+        if (open == std::string::npos || close == open)
+          r.fail("expected a physical name in double quotes, received '" + name + "'");
+        name = name.substr(open + 1, close - open - 1);
         physical_names[{dim, tag}] = name;
       }
     } else if (line == "$Entities") {
       auto f = r.next_fields("entity counts");
       int count[4];
-      for (int& c : count) c = r.get<int>(f, "an entity count");
+      for (int& c : count) c = static_cast<int>(r.count(f, "an entity count"));
       for (int dim = 0; dim < 4; ++dim)
         for (int i = 0; i < count[dim]; ++i) {
           auto e = r.next_fields("an entity");
           const int tag = r.get<int>(e, "an entity tag");
           const int n_coords = dim == 0 ? 3 : 6;
           for (int k = 0; k < n_coords; ++k) r.get<double>(e, "a coordinate");
-          const int n_phys = r.get<int>(e, "a number of physical tags");
+          const long n_phys = r.count(e, "a number of physical tags");
           for (int k = 0; k < n_phys; ++k)
             entity_physicals[{dim, tag}].push_back(std::abs(r.get<int>(e, "a physical tag")));
         }
     } else if (line == "$Nodes") {
       auto f = r.next_fields("node counts");
-      const long blocks = r.get<long>(f, "a block count");
+      const long blocks = r.count(f, "a block count");
       for (long b = 0; b < blocks; ++b) {
         auto h = r.next_fields("a node block header");
         r.get<int>(h, "an entity dimension");
         r.get<int>(h, "an entity tag");
         if (r.get<int>(h, "the parametric flag") != 0) r.fail("parametric nodes are not supported");
-        const long n = r.get<long>(h, "a node count");
+        const long n = r.count(h, "a node count");
         std::vector<long> tags(static_cast<std::size_t>(n));
         for (auto& t : tags) {
           auto l = r.next_fields("a node tag");
@@ -123,13 +179,13 @@ Mesh read_gmsh(const std::string& path, const std::string& surface) {
       }
     } else if (line == "$Elements") {
       auto f = r.next_fields("element counts");
-      const long blocks = r.get<long>(f, "a block count");
+      const long blocks = r.count(f, "a block count");
       for (long b = 0; b < blocks; ++b) {
         auto h = r.next_fields("an element block header");
         const int dim = r.get<int>(h, "an entity dimension");
         const int entity = r.get<int>(h, "an entity tag");
         const int type = r.get<int>(h, "an element type");
-        const long n = r.get<long>(h, "an element count");
+        const long n = r.count(h, "an element count");
         const auto phys_it = entity_physicals.find({dim, entity});
         const std::vector<int> phys =
             phys_it == entity_physicals.end() ? std::vector<int>{} : phys_it->second;
@@ -216,5 +272,7 @@ Mesh read_gmsh(const std::string& path, const std::string& surface) {
   mesh.validate();
   return mesh;
 }
+
+}  // namespace
 
 }  // namespace emdae

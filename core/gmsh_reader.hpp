@@ -13,6 +13,7 @@
 
 #include <stdexcept>
 #include <string>
+#include <string_view>
 
 #include "core/mesh.hpp"
 
@@ -23,6 +24,12 @@ class MeshFileError : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
+/// Reads the regular file `path` (at most 1 GiB); counts in it are checked
+/// against its size before anything is allocated for them.
 Mesh read_gmsh(const std::string& path, const std::string& surface = "");
+
+/// The same from the text of a file, `name` standing for its path in messages.
+Mesh read_gmsh_text(std::string_view text, const std::string& name,
+                    const std::string& surface = "");
 
 }  // namespace emdae

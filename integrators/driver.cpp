@@ -8,15 +8,24 @@
 namespace emdae {
 
 RunOutcome integrate(Stepper& stepper, State& state, const TimeSettings& time,
-                     const StepObserver& on_step, const FailureObserver& on_failure) {
+                     const StepObserver& on_step, const FailureObserver& on_failure,
+                     DriverState* driver) {
   if (!(time.dt > 0)) throw std::invalid_argument("time step must be positive");
   const double min_dt = time.min_dt > 0 ? time.min_dt : time.dt / 1024.0;
   const double eps = 1e-12 * std::max(1.0, std::abs(time.t_end));
   RunOutcome out;
-  double h = time.dt;
-  int successes_at_h = 0;
+  DriverState local;
+  DriverState& d = driver ? *driver : local;
+  if (!(d.h > 0)) d.h = time.dt;
+  double& h = d.h;
+  int& successes_at_h = d.successes_at_h;
   int failures = 0;
   while (state.t < time.t_end - eps) {
+    if (d.pause_at > 0 && d.steps >= d.pause_at) {
+      out.paused = true;
+      out.message = "paused";
+      return out;
+    }
     const double step = std::min(h, time.t_end - state.t);
     const StepStats stats = stepper.step(state, step);
     if (!stats.converged) {
@@ -40,14 +49,16 @@ RunOutcome integrate(Stepper& stepper, State& state, const TimeSettings& time,
       continue;
     }
     ++out.steps;
+    ++d.steps;
     out.newton_iterations += stats.iterations;
-    on_step(state, AcceptedStep{step, stats, failures});
+    const int cutbacks = failures;
     failures = 0;
     // Grow back towards the nominal step after a few quiet steps.
     if (h < time.dt && ++successes_at_h >= 4) {
       h = std::min(time.dt, 2 * h);
       successes_at_h = 0;
     }
+    on_step(state, AcceptedStep{step, stats, cutbacks});
   }
   out.message = "ok";
   return out;

@@ -30,13 +30,27 @@ struct RunOutcome {
   long steps = 0;
   long newton_iterations = 0;
   long cutbacks = 0;
+  bool paused = false;  // stopped at DriverState::pause_at, not at t_end
+};
+
+/// Where the loop is, between calls: what a checkpoint keeps so that a
+/// resumed loop goes on exactly as an uninterrupted one.
+struct DriverState {
+  double h = 0.0;          // the step the loop goes on with (0: time.dt)
+  int successes_at_h = 0;  // accepted steps at h since it was cut or grown
+  long steps = 0;          // accepted steps so far
+  long pause_at = 0;       // > 0: return (RunOutcome::paused) once steps reaches it
 };
 
 using StepObserver = std::function<void(const State&, const AcceptedStep&)>;
 /// Called with each failed attempt (time, dt, stats) before a cut-back.
 using FailureObserver = std::function<void(double t, double dt, const StepStats&)>;
 
+/// With `driver`, the loop starts where it says (a step size, an accepted
+/// step count) and keeps it up to date: the observer of a step sees the
+/// state the loop goes on from.
 RunOutcome integrate(Stepper& stepper, State& state, const TimeSettings& time,
-                     const StepObserver& on_step, const FailureObserver& on_failure = {});
+                     const StepObserver& on_step, const FailureObserver& on_failure = {},
+                     DriverState* driver = nullptr);
 
 }  // namespace emdae

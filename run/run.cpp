@@ -1,15 +1,24 @@
 #include "run/run.hpp"
 
+#include <fcntl.h>
 #include <fmt/format.h>
+#include <sys/file.h>
+#include <unistd.h>
 
+#include <cerrno>
 #include <cmath>
+#include <cstring>
 #include <ctime>
 #include <filesystem>
+#include <fstream>
 #include <functional>
 #include <memory>
+#include <sstream>
 
 #include "contact/mortar_contact.hpp"
 #include "run/describe.hpp"
+#include "verify/atomic_file.hpp"
+#include "verify/binary_io.hpp"
 #include "verify/contact_pressure.hpp"
 #include "verify/history.hpp"
 #include "verify/report.hpp"
@@ -106,12 +115,25 @@ class FieldOutput {
     }
   }
   bool active() const { return writer_ != nullptr; }
+  /// Why the fields stopped (a full disk), or "".
+  const std::string& error() const { return error_; }
+  // A checkpoint's part: the index so far and the last step written.
+  std::vector<std::pair<double, std::string>> index() const {
+    return writer_ ? writer_->index() : std::vector<std::pair<double, std::string>>{};
+  }
+  long written() const { return written_; }
+  void restore(const std::vector<std::pair<double, std::string>>& index, long written) {
+    if (writer_) writer_->restore(index);
+    written_ = written;
+  }
 
  private:
   void fail(const std::exception& e) {
+    error_ = std::string("VTU fields incomplete: ") + e.what();
     observer_.warned(std::string("no further VTU fields: ") + e.what());
     writer_.reset();
   }
+  std::string error_;
   RunObserver& observer_;
   long every_ = 0, written_ = -1;
   std::unique_ptr<FieldWriter> writer_;
@@ -170,6 +192,10 @@ RunInfo run_info(const RunSettings& s) {
   return info;
 }
 
+struct Interrupted : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
 // [statics]: the equilibrium (the bearing's pre-stress); the run starts
 // from it, at rest, with its active contact set. False when it failed, with
 // info.status saying why.
@@ -179,10 +205,14 @@ bool solve_statics(Model& model, const RunSettings& settings, State& state, RunI
   if (!eq.enabled) return true;
   const double start = cpu_now();
   StaticResult r;
+  bool interrupted = false;
   try {
     std::vector<std::vector<int>> holds;
     for (const auto& set : eq.hold_rotation) holds.push_back(model.nodes(set));
     r = solve_static(model.system(), state, eq.settings, holds, on_increment);
+  } catch (const Interrupted& e) {
+    r.message = e.what();
+    interrupted = true;
   } catch (const std::exception& e) {
     r.message = std::string("static solve: ") + e.what();
   }
@@ -199,28 +229,42 @@ bool solve_statics(Model& model, const RunSettings& settings, State& state, RunI
   st.message = r.message;
   info.statics = st;
   if (!r.converged) info.status = r.message;
+  // Ctrl-C between load increments: the caller ends the run, interrupted.
+  if (interrupted) throw Interrupted(r.message);
   return r.converged;
 }
-
-struct Interrupted : std::runtime_error {
-  using std::runtime_error::runtime_error;
-};
 
 // The time loop: each accepted step goes to the recorder, then to
 // `on_sample`; the observer may end it between steps. Sets info.status and
 // info.cpu_seconds (the process CPU time of the loop).
-RunResult::End integrate_model(Stepper& stepper, State& state, const TimeSettings& time,
-                               Recorder& recorder, RunInfo& info, RunObserver& observer,
-                               const std::function<void(const State&, const Sample&)>& on_sample) {
+RunResult::End integrate_model(const std::function<std::unique_ptr<Stepper>()>& make, State& state,
+                               const TimeSettings& time, Recorder& recorder, RunInfo& info,
+                               RunObserver& observer, DriverState& driver, long checkpoint_every,
+                               const std::function<void(const State&, const Sample&)>& on_sample,
+                               const std::function<void()>& checkpoint) {
   RunResult::End end = RunResult::End::Finished;
-  const double cpu_start = cpu_now();
+  const double cpu_start = cpu_now() - info.cpu_seconds;  // a resumed run goes on counting
   try {
-    const RunOutcome outcome =
-        integrate(stepper, state, time, [&](const State& s, const AcceptedStep& step) {
-          on_sample(s, recorder.observe(s, step));
-          if (observer.interrupted())
-            throw Interrupted("interrupted at t = " + fmt::format("{}", s.t));
-        });
+    RunOutcome outcome;
+    // Between checkpoints: at each, a fresh stepper (its Newton factorization,
+    // generalized-alpha's acceleration, IDA's history), as a resumed run has.
+    do {
+      driver.pause_at =
+          checkpoint_every > 0 ? (driver.steps / checkpoint_every + 1) * checkpoint_every : 0;
+      const auto stepper = make();
+      outcome = integrate(
+          *stepper, state, time,
+          [&](const State& s, const AcceptedStep& step) {
+            on_sample(s, recorder.observe(s, step));
+            if (observer.interrupted())
+              throw Interrupted("interrupted at t = " + fmt::format("{}", s.t));
+          },
+          {}, &driver);
+      if (outcome.paused) {
+        info.cpu_seconds = cpu_now() - cpu_start;
+        checkpoint();
+      }
+    } while (outcome.paused);
     info.status = outcome.message;
     if (!outcome.ok) end = RunResult::End::Failed;
   } catch (const Interrupted& e) {
@@ -234,6 +278,100 @@ RunResult::End integrate_model(Stepper& stepper, State& state, const TimeSetting
   return end;
 }
 
+// --- checkpoints --------------------------------------------------------------------
+
+constexpr const char* kCheckpointMagic = "emdae checkpoint 1";
+
+// What a checkpoint holds besides the recorder: the loop, the state, where
+// the history and the fields are.
+struct Checkpoint {
+  DriverState driver;
+  State state;
+  long history_offset = 0, history_rows = 0, last_written = 0, fields_written = -1;
+  double cpu_seconds = 0.0;
+  std::vector<std::pair<double, std::string>> fields_index;
+};
+
+// The run a checkpoint belongs to: a resume of another scene, scheme or
+// step is refused.
+std::string run_identity(const RunSettings& s, const System& system) {
+  return fmt::format("{} {} dofs={} dt={:a} t_end={:a} min_dt={:a} every={} checkpoint_every={}",
+                     s.name, s.scheme, system.n_dofs(), s.time.dt, s.time.t_end, s.time.min_dt,
+                     s.output.every, s.checkpoint_every);
+}
+
+std::string checkpoint_path(const std::string& dir) {
+  return (fs::path(dir) / "checkpoint" / "state.bin").string();
+}
+
+void write_checkpoint(const std::string& dir, const std::string& identity, const Checkpoint& c,
+                      const Recorder& recorder) {
+  using namespace binary;
+  std::ostringstream out(std::ios::binary);
+  put_string(out, kCheckpointMagic);
+  put_string(out, identity);
+  put(out, c.driver.h);
+  put(out, c.driver.successes_at_h);
+  put(out, c.driver.steps);
+  put(out, c.state.t);
+  put_vec(out, c.state.q);
+  put_vec(out, c.state.v);
+  put_vec(out, c.state.lambda);
+  put_ints(out, c.state.active);
+  for (long x : {c.history_offset, c.history_rows, c.last_written, c.fields_written}) put(out, x);
+  put(out, c.cpu_seconds);
+  put<std::uint64_t>(out, c.fields_index.size());
+  for (const auto& [t, file] : c.fields_index) {
+    put(out, t);
+    put_string(out, file);
+  }
+  recorder.save(out);
+  put_string(out, kCheckpointMagic);  // the end: a whole file
+  std::error_code ec;
+  fs::create_directories(fs::path(dir) / "checkpoint", ec);
+  write_atomically(checkpoint_path(dir), out.str(), "checkpoint");
+}
+
+Checkpoint read_checkpoint(const std::string& dir, const std::string& identity,
+                           Recorder& recorder) {
+  using namespace binary;
+  const std::string path = checkpoint_path(dir);
+  std::ifstream in(path, std::ios::binary);
+  if (!in)
+    throw OutputError(
+        fmt::format("cannot resume from '{}': no checkpoint ({}; run with "
+                    "--checkpoint-every N to write one)",
+                    dir, path));
+  Checkpoint c;
+  try {
+    if (get_string(in) != kCheckpointMagic) throw std::runtime_error("not an emdae checkpoint");
+    const std::string theirs = get_string(in);
+    if (theirs != identity)
+      throw std::runtime_error("it is of another run (" + theirs + "; this one: " + identity + ")");
+    c.driver.h = get<double>(in);
+    c.driver.successes_at_h = get<int>(in);
+    c.driver.steps = get<long>(in);
+    c.state.t = get<double>(in);
+    c.state.q = get_vec(in);
+    c.state.v = get_vec(in);
+    c.state.lambda = get_vec(in);
+    c.state.active = get_ints(in);
+    for (long* x : {&c.history_offset, &c.history_rows, &c.last_written, &c.fields_written})
+      *x = get<long>(in);
+    c.cpu_seconds = get<double>(in);
+    const auto n = get<std::uint64_t>(in);
+    for (std::uint64_t i = 0; i < n && in; ++i) {
+      const double t = get<double>(in);
+      c.fields_index.emplace_back(t, get_string(in));
+    }
+    recorder.restore(in);
+    if (get_string(in) != kCheckpointMagic) throw std::runtime_error("it is damaged");
+  } catch (const std::runtime_error& e) {
+    throw OutputError(fmt::format("cannot resume from '{}': {}", path, e.what()));
+  }
+  return c;
+}
+
 }  // namespace
 
 void create_output_folder(const std::string& dir) {
@@ -242,6 +380,63 @@ void create_output_folder(const std::string& dir) {
   if (ec || !fs::is_directory(dir))
     throw OutputError(fmt::format("cannot create output folder '{}': {}", dir,
                                   ec ? ec.message() : "exists and is not a folder"));
+}
+
+bool is_run_output(const std::string& name) {
+  static const char* const kOwn[] = {"history.csv", "summary.json", "report.html", "contact.csv",
+                                     "fields.pvd",  "fields",       "checkpoint",  ".emdae.lock"};
+  for (const char* own : kOwn)
+    if (name == own) return true;
+  // write_atomically's temporary files ("summary.json.tmp.123") of a killed run.
+  return name.find(".tmp.") != std::string::npos;
+}
+
+OutputFolder::OutputFolder(const std::string& dir, bool force, bool clean) {
+  create_output_folder(dir);
+  const std::string lock = (fs::path(dir) / ".emdae.lock").string();
+  lock_fd_ = ::open(lock.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
+  if (lock_fd_ < 0)
+    throw OutputError(fmt::format("cannot lock output folder '{}': {}", dir, std::strerror(errno)));
+  if (::flock(lock_fd_, LOCK_EX | LOCK_NB) != 0) {
+    const int why = errno;
+    ::close(lock_fd_);
+    lock_fd_ = -1;
+    throw OutputError(
+        fmt::format("output folder '{}' is in use by another emdae run ({}); give another --out",
+                    dir, why == EWOULDBLOCK ? "it holds .emdae.lock" : std::strerror(why)));
+  }
+  if (!clean) return;  // a resumed run goes on with what is there
+  // The folder is ours: an earlier run's output goes, anything else stays
+  // and needs --force (it may be the user's).
+  std::vector<fs::path> own;
+  std::string foreign;
+  for (const auto& e : fs::directory_iterator(dir)) {
+    const std::string name = e.path().filename().string();
+    if (name == ".emdae.lock") continue;
+    if (is_run_output(name))
+      own.push_back(e.path());
+    else if (foreign.empty())
+      foreign = name;
+  }
+  if (!foreign.empty() && !force) {
+    ::close(lock_fd_);
+    lock_fd_ = -1;
+    throw OutputError(fmt::format(
+        "output folder '{}' holds '{}', which an emdae run did not write; give another --out, "
+        "or --force to run there anyway (emdae's own files are replaced, others kept)",
+        dir, foreign));
+  }
+  for (const auto& p : own) {
+    std::error_code ec;
+    fs::remove_all(p, ec);
+    if (ec)
+      throw OutputError(
+          fmt::format("cannot remove the earlier run's '{}': {}", p.string(), ec.message()));
+  }
+}
+
+OutputFolder::~OutputFolder() {
+  if (lock_fd_ >= 0) ::close(lock_fd_);  // releases the lock
 }
 
 std::string scheme_refusal(const Model& model, const RunSettings& settings) {
@@ -261,7 +456,11 @@ RunResult run(Model& model, const RunSettings& settings, RunObserver* watcher) {
   const System& system = model.system();
   const std::string& dir = settings.out_dir;
   const bool writes = !dir.empty();
-  if (writes) create_output_folder(dir);
+  // A resumed run goes on in its folder; checkpoints need one.
+  const bool resume = settings.resume && !settings.static_only;
+  if (resume && !writes) throw OutputError("a resumed run needs its output folder");
+  std::optional<OutputFolder> folder;
+  if (writes) folder.emplace(dir, settings.force, !resume);
   const auto path = [&dir](const char* file) { return (fs::path(dir) / file).string(); };
 
   RunResult result;
@@ -270,23 +469,48 @@ RunResult run(Model& model, const RunSettings& settings, RunObserver* watcher) {
   // A static analysis starts at rest (prescribed motions have no velocity).
   if (settings.static_only) state.v.setZero();
   RunInfo info = run_info(settings);
+  // From the start the folder says the run is not over: a summary with
+  // status "running" (a killed run leaves it so).
+  if (writes) {
+    RunInfo running = info;
+    running.status = "running";
+    try {
+      write_summary(path("summary.json"),
+                    summarize(running, system, Recorder(system, state), settings.tolerances));
+    } catch (const std::exception& e) {
+      throw OutputError(e.what());
+    }
+  }
   // A dynamic run starts from the equilibrium of its [statics], at rest.
-  if (!settings.static_only && !solve_statics(model, settings, state, info))
-    result.end = RunResult::End::Failed;
+  try {
+    if (!settings.static_only && !solve_statics(model, settings, state, info))
+      result.end = RunResult::End::Failed;
+  } catch (const Interrupted&) {
+    result.end = RunResult::End::Interrupted;
+  }
   Recorder recorder(system, state);
   recorder.set_load_free_test([&model](double a, double b) { return model.loads_vanish(a, b); });
+  const std::string identity = run_identity(settings, system);
+  std::optional<Checkpoint> resumed;
+  if (resume && result.finished()) resumed = read_checkpoint(dir, identity, recorder);
   std::unique_ptr<HistoryWriter> history;
   if (writes) {
     try {
-      history = std::make_unique<HistoryWriter>(
-          path("history.csv"), system.dim(), recorder.has_external_work(), recorder.has_contact());
-      history->write(recorder.initial());
+      if (resumed) {
+        history = std::make_unique<HistoryWriter>(
+            path("history.csv"), system.dim(), recorder.has_external_work(), recorder.has_contact(),
+            resumed->history_offset, resumed->history_rows);
+      } else {
+        history =
+            std::make_unique<HistoryWriter>(path("history.csv"), system.dim(),
+                                            recorder.has_external_work(), recorder.has_contact());
+        history->write(recorder.initial());
+      }
     } catch (const std::exception& e) {
       throw OutputError(e.what());
     }
   }
   FieldOutput fields(model, settings, observer);
-  fields.maybe_write(state, 0);
   // A report is a view of the run: a failure to keep its drawings only costs them.
   std::unique_ptr<SnapshotRecorder> bodies;
   const auto snap = [&](const std::function<void()>& f) {
@@ -306,6 +530,32 @@ RunResult run(Model& model, const RunSettings& settings, RunObserver* watcher) {
   snap([&] { bodies->observe(state, 0, recorder.initial().active_contacts); });
 
   long last_written = 0;
+  DriverState driver;
+  if (resumed) {
+    state = resumed->state;
+    driver = resumed->driver;
+    last_written = resumed->last_written;
+    info.cpu_seconds = resumed->cpu_seconds;
+    fields.restore(resumed->fields_index, resumed->fields_written);
+  } else {
+    fields.maybe_write(state, 0);
+  }
+  const auto checkpoint = [&] {
+    Checkpoint c;
+    c.driver = driver;
+    c.state = state;
+    c.history_offset = history ? history->offset() : 0;
+    c.history_rows = history ? history->rows() : 0;
+    c.last_written = last_written;
+    c.fields_written = fields.written();
+    c.fields_index = fields.index();
+    c.cpu_seconds = info.cpu_seconds;
+    write_checkpoint(dir, identity, c, recorder);
+    if (!settings.resume_note.empty())
+      write_atomically((fs::path(dir) / "checkpoint" / "run.json").string(), settings.resume_note,
+                       "checkpoint's command");
+  };
+
   // A history row every `output.every` steps (and at `last`), and the fields.
   const auto keep = [&](const State& s, const Sample& sample, bool last) {
     if (history && (last || sample.step % settings.output.every == 0)) {
@@ -333,28 +583,37 @@ RunResult run(Model& model, const RunSettings& settings, RunObserver* watcher) {
     const int increments = settings.statics.settings.increments;
     double t_previous = state.t;
     if (has_contact) contact.emplace();
-    if (!solve_statics(model, settings, state, info,
-                       [&](const State& s, const StaticIncrement& inc) {
-                         AcceptedStep step;
-                         step.dt = inc.t - t_previous;
-                         t_previous = inc.t;
-                         step.stats.converged = true;
-                         step.stats.iterations = static_cast<int>(inc.newton_iterations);
-                         keep(s, recorder.observe(s, step), inc.index == increments);
-                         take_contact(s);
-                       }))
-      result.end = RunResult::End::Failed;
+    try {
+      if (!solve_statics(
+              model, settings, state, info, [&](const State& s, const StaticIncrement& inc) {
+                AcceptedStep step;
+                step.dt = inc.t - t_previous;
+                t_previous = inc.t;
+                step.stats.converged = true;
+                step.stats.iterations = static_cast<int>(inc.newton_iterations);
+                keep(s, recorder.observe(s, step), inc.index == increments);
+                take_contact(s);
+                // Ctrl-C: the increments done are kept, as in the time loop.
+                if (inc.index < increments && observer.interrupted())
+                  throw Interrupted(
+                      fmt::format("interrupted at load increment {} of {}", inc.index, increments));
+              }))
+        result.end = RunResult::End::Failed;
+    } catch (const Interrupted&) {
+      result.end = RunResult::End::Interrupted;
+    }
     if (info.statics) info.cpu_seconds = info.statics->cpu_seconds;
   } else {
     observer.initial(state);
     observer.started(state.t, settings.time.t_end);
     // A failed static solve leaves nothing to integrate from.
     if (result.finished()) {
-      // Made after the equilibrium, which added and removed constraints of its own.
-      const auto stepper = make_stepper(settings.scheme, system, settings.schemes);
-      result.end =
-          integrate_model(*stepper, state, settings.time, recorder, info, observer,
-                          [&](const State& s, const Sample& sample) { keep(s, sample, false); });
+      // Made after the equilibrium, which added and removed constraints of
+      // its own (and afresh at every checkpoint).
+      result.end = integrate_model(
+          [&] { return make_stepper(settings.scheme, system, settings.schemes); }, state,
+          settings.time, recorder, info, observer, driver, writes ? settings.checkpoint_every : 0,
+          [&](const State& s, const Sample& sample) { keep(s, sample, false); }, checkpoint);
     }
     observer.finished();
     // The last state always ends the fields too.
@@ -377,17 +636,28 @@ RunResult run(Model& model, const RunSettings& settings, RunObserver* watcher) {
   result.contact_table = writes && contact.has_value();
   if (contact) result.contact = *contact;
   if (!writes) return result;
-  if (contact) write_contact_table(path("contact.csv"), *contact);
+  result.output_error = fields.error();
+  const auto output_failed = [&](const std::string& what) {
+    observer.warned(what);
+    if (result.output_error.empty()) result.output_error = what;
+  };
+  if (contact) try {
+      write_contact_table(path("contact.csv"), *contact);
+    } catch (const std::exception& e) {
+      result.contact_table = false;
+      output_failed(std::string("no contact table: ") + e.what());
+    }
   write_summary(path("summary.json"), result.summary);
   try {
     ReportInfo report = report_info(model, settings);
-    if (contact) report.files.push_back("contact.csv");
+    if (result.contact_table) report.files.push_back("contact.csv");
     if (fields.active()) report.files.push_back("fields.pvd");
     if (bodies) report.bodies = &bodies->snapshots();
     write_report(dir, report, result.summary);
   } catch (const std::exception& e) {
-    // The run is judged by history and summary; a report is their view.
-    observer.warned(std::string("no report: ") + e.what());
+    // The run is judged by history and summary; a report is their view, but
+    // a missing one is still a failure to say (a full disk).
+    output_failed(std::string("no report: ") + e.what());
   }
   return result;
 }

@@ -68,8 +68,23 @@ struct RunSettings {
   OutputSettings output;
   Tolerances tolerances;
   /// Where history.csv, summary.json, report.html, contact.csv and the VTU
-  /// fields go (created when missing); empty: nothing is written.
+  /// fields go (created when missing); empty: nothing is written. The folder
+  /// is the run's alone: locked while it runs, and an earlier run's output is
+  /// removed first (claim_output_folder).
   std::string out_dir;
+  /// Reuse a folder that holds files emdae did not write (they are kept).
+  bool force = false;
+  /// Every this many accepted steps, the whole state of the run goes to
+  /// out_dir/checkpoint/state.bin (atomically); 0: none. At each checkpoint
+  /// the stepper is made afresh, as a resumed run's is, so that a run resumed
+  /// from any checkpoint ends bit for bit as the uninterrupted run.
+  long checkpoint_every = 0;
+  /// Go on from out_dir's checkpoint instead of starting: the model and
+  /// settings must be the run's own (its [statics] is solved again, the same).
+  bool resume = false;
+  /// What the caller needs to resume the run (the command line, as JSON),
+  /// written beside each checkpoint as checkpoint/run.json.
+  std::string resume_note;
 };
 
 /// Watches a run: progress, interruption, what went wrong on the side.
@@ -102,6 +117,9 @@ class OutputError : public std::runtime_error {
 struct RunResult {
   enum class End { Finished, Failed, Interrupted, InternalError };
   End end = End::Finished;
+  /// A file of the run that could not be written (a full disk): the run
+  /// itself may have finished, but its output is not whole.
+  std::string output_error;
   Summary summary;                             // summary.status says how it ended
   State state;                                 // the last state reached
   bool fields = false, contact_table = false;  // fields.pvd, contact.csv written
@@ -114,6 +132,27 @@ struct RunResult {
 /// Creates the folder `dir` (and its parents) unless it is there; throws
 /// OutputError naming it and why not.
 void create_output_folder(const std::string& dir);
+
+/// An output folder owned by one run: created, locked (flock on
+/// DIR/.emdae.lock, released when this is destroyed or the process ends),
+/// and cleared of an earlier run's output (history.csv, summary.json,
+/// report.html, contact.csv, fields.pvd, fields/, checkpoint/, temporary
+/// files). Throws OutputError when another run holds the folder, or when it
+/// holds files emdae did not write and `force` is false.
+class OutputFolder {
+ public:
+  /// `clean` false: keep what is there (a resumed run).
+  OutputFolder(const std::string& dir, bool force, bool clean = true);
+  ~OutputFolder();
+  OutputFolder(const OutputFolder&) = delete;
+  OutputFolder& operator=(const OutputFolder&) = delete;
+
+ private:
+  int lock_fd_ = -1;
+};
+
+/// The names in an output folder that an emdae run writes.
+bool is_run_output(const std::string& name);
 
 /// Why `scheme` cannot run the model (the stepper refuses it), or "".
 std::string scheme_refusal(const Model& model, const RunSettings& settings);

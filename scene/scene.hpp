@@ -32,6 +32,8 @@
 //                  load_time: equilibrium first (or only, without [time])
 //   [output]       every (history row every N steps, default 1), vtu_every (VTU
 //                  fields of FE bodies every N steps; default about 100 files, 0: none)
+//   [limits]       max_steps (default 1e7), max_memory_mb (default 4096): a run
+//                  that would need more is refused before anything is built
 //   [tolerances]   energy_rel, energy_balance_rel, linear_momentum,
 //                  angular_momentum_rel, angular_momentum_balance_rel,
 //                  constraint, gap_violation, penetration, contact_pressure_spread
@@ -84,6 +86,14 @@ struct Scene {
   RunSettings settings;
   /// Things that are allowed but probably not meant (with their location).
   std::vector<std::string> warnings;
+  /// What a run of the scene would need, estimated before anything is built,
+  /// against the limits of [limits] (the scene is refused past them).
+  struct Estimate {
+    long steps = 0;             // time steps (static analysis: load increments)
+    double memory_bytes = 0.0;  // the model, its Jacobian and factors
+    long max_steps = 0;
+    double max_memory_bytes = 0.0;
+  } estimate;
 
   System& system() { return model->system(); }
   const System& system() const { return model->system(); }

@@ -6,9 +6,16 @@
 
 #include "contact/contact_pair.hpp"
 #include "core/gmsh_reader.hpp"
+#include "integrators/stepper.hpp"
 #include "scene/scene_reader.hpp"
 
 namespace emdae::scene_reader {
+
+// Memory a run needs per Q1 element (2D): the model and system, the sparse
+// Jacobian and its KLU factors, the recorder's and the writers' vectors;
+// measured as the peak resident size of `emdae run` (scheme em) on a ring of
+// 10^5 elements: 1.08 GB, 10.8 KB per element (docs/reliability.md).
+constexpr double kBytesPerElement = 11 * 1024;
 
 std::string Builder::unique_name(const Fields& f, std::vector<std::string>& taken,
                                  const std::string& fallback, const char* what) const {
@@ -23,7 +30,7 @@ std::string Builder::unique_name(const Fields& f, std::vector<std::string>& take
   return name;
 }
 
-Mesh Builder::mesh(const Fields& f) const {
+Mesh Builder::mesh(const Fields& f) {
   const Fields m = f.table("mesh", "{type = \"ring\" | \"rectangle\" | \"gmsh\", ...}", "a mesh");
   Mesh mesh = generated_mesh(m);
   // Any mesh may be turned about its area centroid (a square on its corner).
@@ -37,7 +44,18 @@ Mesh Builder::mesh(const Fields& f) const {
   return mesh;
 }
 
-Mesh Builder::generated_mesh(const Fields& m) const {
+void Builder::charge_elements(const Fields& m, std::string_view k, double elements) {
+  Scene::Estimate& e = scene_.estimate;
+  e.memory_bytes += elements * kBytesPerElement;
+  if (!(e.memory_bytes <= e.max_memory_bytes))
+    m.fail_key(k, fmt::format("{:.0f} elements make the scene need about {:.0f} MB (the model, its "
+                              "Jacobian and factors), more than limits.max_memory_mb = {:.0f} "
+                              "(raise it with --set limits.max_memory_mb=N), received {}",
+                              elements, e.memory_bytes / (1 << 20), e.max_memory_bytes / (1 << 20),
+                              show(*m.find(k))));
+}
+
+Mesh Builder::generated_mesh(const Fields& m) {
   const std::string type = m.string("type", "\"ring\", \"rectangle\" or \"gmsh\"");
   // Element counts beyond this are a typo, not a mesh (and would overflow).
   constexpr long kMaxCount = 100000, kMaxElements = 10000000;
@@ -56,6 +74,7 @@ Mesh Builder::generated_mesh(const Fields& m) const {
     if (around * through > kMaxElements)
       m.fail_key("through", fmt::format("{} x {} elements is more than {} in one body, received {}",
                                         around, through, kMaxElements, through));
+    charge_elements(m, "through", static_cast<double>(around * through));
     return ring_mesh(Eigen::Vector2d(c[0], c[1]), r_in, r_out, static_cast<int>(around),
                      static_cast<int>(through));
   }
@@ -72,6 +91,7 @@ Mesh Builder::generated_mesh(const Fields& m) const {
     if (nx * ny > kMaxElements)
       m.fail_key("ny", fmt::format("{} x {} elements is more than {} in one body, received {}", nx,
                                    ny, kMaxElements, ny));
+    charge_elements(m, "ny", static_cast<double>(nx * ny));
     const Eigen::Vector2d lo(o[0], o[1]), hi(o[0] + w, o[1] + h);
     Mesh mesh = rectangle_mesh(lo, w, h, static_cast<int>(nx), static_cast<int>(ny));
     // Grading: element sizes growing away from a point (Hertz's contact).
@@ -103,15 +123,17 @@ Mesh Builder::generated_mesh(const Fields& m) const {
     const std::string surface = m.optional_string("surface").value_or("");
     const std::filesystem::path base = std::filesystem::path(scene_.settings.source).parent_path();
     const std::string path = (base / file).string();
+    Mesh mesh;
     try {
-      Mesh mesh = read_gmsh(path, surface);
+      mesh = read_gmsh(path, surface);
       mesh.description =
           fmt::format("gmsh {}{}, {} elements", file, surface.empty() ? "" : " (" + surface + ")",
                       mesh.n_elements());
-      return mesh;
     } catch (const std::exception& e) {
       m.fail_key("file", std::string(e.what()) + ", received \"" + file + "\"");
     }
+    charge_elements(m, "file", static_cast<double>(mesh.n_elements()));
+    return mesh;
   }
   m.fail_key("type", "unknown mesh type, received " + show(*m.find("type")) +
                          hint(type, {"ring", "rectangle", "gmsh"}, "mesh types"));
@@ -257,6 +279,42 @@ void Builder::parse_contact(const Fields& f) {
                "a penalty contact keeps the nodes' mass: give either penalty or "
                "modified_mass = true, not both");
   model_call(f, [&] { add_mortar_contact(model(), slave, master, name, options); });
+  contact_where_[name] = f.where();
+}
+
+void Builder::refuse_overlap() {
+  // An equilibrium first pushes an overlap apart: the bearing's pre-stress.
+  if (settings().statics.enabled) return;
+  System& system = model().system();
+  if (system.unilateral().empty()) return;
+  const State state = initial_state(system);
+  // Round-off, not overlap: relative to the size of the model (a weighted
+  // gap is a length times a length).
+  const int dim = system.dim();
+  Eigen::VectorXd lo = Eigen::VectorXd::Constant(dim, std::numeric_limits<double>::infinity());
+  Eigen::VectorXd hi = -lo;
+  for (int n = 0; n < system.n_nodes(); ++n) {
+    lo = lo.cwiseMin(state.q.segment(dim * n, dim));
+    hi = hi.cwiseMax(state.q.segment(dim * n, dim));
+  }
+  const double size = (hi - lo).norm();
+  const double tolerance = 1e-9 * size * size;
+  for (const auto& set : system.unilateral()) {
+    set->prepare(state.q, state.v, settings().static_only ? 0.0 : settings().time.dt);
+    for (int i = 0; i < set->size(); ++i) {
+      const double phi = set->gap(i, state.q);
+      if (!(phi < -tolerance)) continue;  // apart, touching, or nothing opposite (+inf)
+      const auto at = contact_where_.find(set->name());
+      fail(at == contact_where_.end() ? loc_.start() : at->second,
+           fmt::format("contacts[{}]", std::distance(contact_names_.begin(),
+                                                     std::find(contact_names_.begin(),
+                                                               contact_names_.end(), set->name()))),
+           fmt::format("the bodies overlap at the start: {} is inside the master surface "
+                       "(weighted gap {:.6g}); move them apart, or add [statics] to push the "
+                       "overlap apart first, received contact '{}'",
+                       set->describe(i), phi, set->name()));
+    }
+  }
 }
 
 void Builder::parse_dirichlet(const Fields& f) {

@@ -34,6 +34,7 @@ void Builder::finish() {
     if (e.key().empty()) throw SceneError(loc_.start() + ": " + e.what());
     fail(loc_.start(), e.key(), e.what());
   }
+  refuse_overlap();
 }
 
 namespace {
@@ -56,9 +57,10 @@ struct Section {
 // and loads name body sets, anchors name particles or body sets and must not
 // meet prescribed nodes, gravity weighs particles and the free body nodes,
 // statics holds body sets), so the order matters; [scene] comes first for the
-// dimension.
+// dimension, [limits] before anything they bound.
 const Section kSections[] = {
     {"scene", Kind::Table, false, true, "", &Builder::parse_scene},
+    {"limits", Kind::Table, false, true, "", &Builder::parse_limits},
     {"time", Kind::Table, true, false,
      "[time] with dt and t_end; or, for a static analysis, [statics] without [time]",
      &Builder::parse_time},
@@ -131,20 +133,6 @@ void build(Builder& builder, const Locator& loc, const toml::table& root) {
 
 namespace {
 
-// Line and column (1-based) of byte `offset` in `text`.
-std::pair<std::size_t, std::size_t> line_column(std::string_view text, std::size_t offset) {
-  std::size_t line = 1, column = 1;
-  for (std::size_t i = 0; i < offset; ++i) {
-    if (text[i] == '\n') {
-      ++line;
-      column = 1;
-    } else {
-      ++column;
-    }
-  }
-  return {line, column};
-}
-
 std::string default_name(const std::string& source) {
   const std::string stem = fs::path(source).stem().string();
   std::string out;
@@ -161,6 +149,12 @@ std::unique_ptr<Scene> load_scene_text(std::string_view text, const std::string&
                                        const std::vector<SceneOverride>& overrides) {
   using namespace scene_reader;
   const Locator loc(source_name);
+  // What toml++ 3.3.0 must not see: its parser recurses per dotted key part
+  // and nested value (a stack overflow), and malformed UTF-8 or control bytes
+  // in a header reach undefined behaviour in it. All are refused here.
+  if (text.size() > kMaxSceneBytes)
+    throw SceneError(fmt::format("{}: the scene file has {} bytes, more than a scene's limit of {}",
+                                 source_name, text.size(), kMaxSceneBytes));
   // TOML forbids NUL; saying "binary" is clearer than toml++'s "saw '\u0000'".
   if (const auto nul = text.find('\0'); nul != std::string_view::npos) {
     const auto [line, column] = line_column(text, nul);
@@ -168,6 +162,12 @@ std::unique_ptr<Scene> load_scene_text(std::string_view text, const std::string&
         fmt::format("{}:{}:{}: not a text file (NUL byte): a scene file is UTF-8 TOML text",
                     source_name, line, column));
   }
+  for (const auto& problem : {text_problem(text), nesting_problem(text)})
+    if (problem) {
+      const auto [line, column] = line_column(text, problem->offset);
+      throw SceneError(fmt::format("{}:{}:{}: {} (a scene file is UTF-8 TOML text)", source_name,
+                                   line, column, problem->what));
+    }
   toml::table root;
   try {
     root = toml::parse(text, source_name);
@@ -202,15 +202,25 @@ std::unique_ptr<Scene> load_scene(const std::string& path,
 
 std::unique_ptr<Scene> load_scene(const std::string& path,
                                   const std::vector<SceneOverride>& overrides) {
+  // Only a regular file: a device (/dev/zero) or a pipe never ends, and a
+  // scene larger than the limit is refused after reading one byte more.
   std::error_code ec;
-  if (std::filesystem::is_directory(path, ec))
+  const auto status = std::filesystem::status(path, ec);
+  if (std::filesystem::is_directory(status))
     throw SceneError(path + ": cannot read scene file: is a directory");
+  if (std::filesystem::exists(status) && !std::filesystem::is_regular_file(status))
+    throw SceneError(path +
+                     ": cannot read scene file: not a regular file (a device, pipe or socket)");
   std::ifstream in(path, std::ios::binary);
   if (!in) throw SceneError(path + ": cannot read scene file: " + std::strerror(errno));
-  std::ostringstream content;
-  content << in.rdbuf();
+  std::string content(scene_reader::kMaxSceneBytes + 1, '\0');
+  in.read(content.data(), static_cast<std::streamsize>(content.size()));
   if (in.bad()) throw SceneError(path + ": cannot read scene file: " + std::strerror(errno));
-  return load_scene_text(content.str(), path, overrides);
+  content.resize(static_cast<std::size_t>(in.gcount()));
+  if (content.size() > scene_reader::kMaxSceneBytes)
+    throw SceneError(fmt::format("{}: the scene file is larger than a scene's limit of {} bytes",
+                                 path, scene_reader::kMaxSceneBytes));
+  return load_scene_text(content, path, overrides);
 }
 
 }  // namespace emdae

@@ -18,6 +18,7 @@ class Builder {
 
   // scene_settings.cpp
   void parse_scene(const Fields& f);
+  void parse_limits(const Fields& f);
   void parse_time(const Fields& f);
   void parse_scheme(const Fields& f);
   void parse_statics(const Fields& f);
@@ -36,6 +37,9 @@ class Builder {
   void parse_load(const Fields& f);
 
   void finish();
+  /// Refuses bodies in contact pairs that overlap at the start (without
+  /// [statics] to push them apart): such a run "conserves" nothing.
+  void refuse_overlap();
   /// The scene has [statics] and no [time]: a static analysis.
   void set_static_only() { scene_.settings.static_only = true; }
 
@@ -75,8 +79,11 @@ class Builder {
   /// A name that is unique among `taken`, or the default.
   std::string unique_name(const Fields& f, std::vector<std::string>& taken,
                           const std::string& fallback, const char* what) const;
-  Mesh mesh(const Fields& f) const;
-  Mesh generated_mesh(const Fields& m) const;
+  Mesh mesh(const Fields& f);
+  /// Adds `elements` Q1 elements to the memory estimate; fails at key k of
+  /// `m` when the estimate passes limits.max_memory_mb.
+  void charge_elements(const Fields& m, std::string_view k, double elements);
+  Mesh generated_mesh(const Fields& m);
   Material material(const Fields& f) const;
 
   Scene& scene_;
@@ -84,6 +91,7 @@ class Builder {
   // Where particles and bodies were declared, for "first defined at".
   std::map<std::string, std::string> particle_where_, body_where_;
   std::vector<std::string> contact_names_, load_names_;
+  std::map<std::string, std::string> contact_where_;
   // Where scheme.name was given (a static analysis does not use it).
   std::string scheme_name_where_;
 };

@@ -27,6 +27,23 @@ void Builder::parse_scene(const Fields& f) {
   scene_.model = std::make_unique<Model>(static_cast<int>(dim));
 }
 
+void Builder::parse_limits(const Fields& f) {
+  f.only({"max_steps", "max_memory_mb"});
+  Scene::Estimate& e = scene_.estimate;
+  e.max_steps = f.integer_in("max_steps", 10'000'000, 1, 1'000'000'000'000);
+  e.max_memory_bytes =
+      static_cast<double>(f.integer_in("max_memory_mb", 4096, 1, 1'000'000'000)) * (1 << 20);
+}
+
+namespace {
+
+// "t_end / dt = 1e+09 steps": a count in a message.
+std::string count_text(double n) {
+  return n < 1e7 ? fmt::format("{:.0f}", n) : fmt::format("{:.3g}", n);
+}
+
+}  // namespace
+
 void Builder::parse_time(const Fields& f) {
   f.only({"dt", "t_end", "min_dt"});
   TimeSettings& t = settings().time;
@@ -41,6 +58,15 @@ void Builder::parse_time(const Fields& f) {
                                show(*f.find("min_dt")));
     t.min_dt = *min_dt;
   }
+  // The steps a run would take, before it runs (a step of 1e-300 would never end).
+  const double steps = std::ceil(t.t_end / t.dt - 1e-9);
+  Scene::Estimate& e = scene_.estimate;
+  if (!(steps <= static_cast<double>(e.max_steps)))
+    f.fail_key("dt", fmt::format("t_end / dt = {} / {} is {} steps, more than limits.max_steps = "
+                                 "{} (raise it with --set limits.max_steps=N), received {}",
+                                 show_number(t.t_end), show_number(t.dt), count_text(steps),
+                                 e.max_steps, show(*f.find("dt"))));
+  e.steps = static_cast<long>(steps);
 }
 
 namespace {
@@ -151,6 +177,7 @@ void Builder::parse_statics(const Fields& f) {
   s.newton = newton;
   s.newton.tolerance = f.optional_positive("newton_tolerance").value_or(newton.tolerance);
   s.increments = static_cast<int>(f.integer_in("increments", 1, 1, 100000));
+  if (settings().static_only) scene_.estimate.steps = s.increments;
   const double load_time = f.optional_non_negative("load_time").value_or(0.0);
   s.load_time = load_time;
   // Increments at one time would all solve the same problem.

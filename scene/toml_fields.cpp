@@ -1,6 +1,8 @@
 #include "scene/toml_fields.hpp"
 
 #include <cctype>
+#include <cmath>
+#include <limits>
 #include <sstream>
 
 namespace emdae {
@@ -64,6 +66,19 @@ std::string show_number(double x) {
   return s;
 }
 
+std::string range_problem(double x) {
+  if (std::abs(x) > kMaxMagnitude)
+    return fmt::format(
+        "must be at most {:g} in magnitude (larger values overflow in the solve), received ",
+        kMaxMagnitude);
+  if (x != 0.0 && std::fpclassify(x) == FP_SUBNORMAL)
+    return fmt::format(
+        "must be zero or at least {:g} in magnitude (a subnormal number overflows when "
+        "inverted), received ",
+        std::numeric_limits<double>::min());
+  return "";
+}
+
 std::string show(const toml::node& n, std::size_t limit) {
   std::string out;
   if (const auto* s = n.as_string()) {
@@ -102,22 +117,153 @@ std::string join(const std::vector<std::string>& items, const char* sep) {
 }
 
 [[noreturn]] void fail(const std::string& where, const std::string& key, const std::string& what) {
-  throw SceneError(where + ": key '" + key + "': " + what);
+  throw SceneError(where + ": key '" + cut(key, 100) + "': " + what);
+}
+
+std::string cut(const std::string& s, std::size_t limit) {
+  if (s.size() <= limit) return s;
+  // Not inside a UTF-8 sequence: back up to the start of a character.
+  std::size_t end = limit - 3;
+  while (end > 0 && (static_cast<unsigned char>(s[end]) & 0xC0) == 0x80) --end;
+  return s.substr(0, end) + "...";
 }
 
 std::string hint(const std::string& word, const std::vector<std::string>& candidates,
                  const std::string& label) {
   const std::string guess = closest_match(word, candidates);
-  return " (" + (guess.empty() ? "" : "did you mean '" + guess + "'? ") + label + ": " +
-         join(candidates) + ")";
+  // The list is for reading: a few names, each cut, and how many more.
+  constexpr std::size_t kHintListed = 20;
+  std::vector<std::string> listed;
+  for (std::size_t i = 0; i < candidates.size() && i < kHintListed; ++i)
+    listed.push_back(cut(candidates[i], 40));
+  std::string list = join(listed);
+  if (candidates.size() > kHintListed)
+    list += fmt::format(" and {} more", candidates.size() - kHintListed);
+  return " (" + (guess.empty() ? "" : "did you mean '" + cut(guess, 40) + "'? ") + label + ": " +
+         list + ")";
+}
+
+std::pair<std::size_t, std::size_t> line_column(std::string_view text, std::size_t offset) {
+  std::size_t line = 1, column = 1;
+  for (std::size_t i = 0; i < offset && i < text.size(); ++i) {
+    if (text[i] == '\n') {
+      ++line;
+      column = 1;
+    } else if ((static_cast<unsigned char>(text[i]) & 0xC0) != 0x80) {
+      ++column;  // columns count characters, not the bytes of one
+    }
+  }
+  return {line, column};
+}
+
+std::optional<TextProblem> text_problem(std::string_view text) {
+  const auto* b = reinterpret_cast<const unsigned char*>(text.data());
+  const std::size_t n = text.size();
+  for (std::size_t i = 0; i < n;) {
+    const unsigned c = b[i];
+    if (c < 0x80) {
+      if ((c < 0x20 && c != '\t' && c != '\n' && c != '\r') || c == 0x7F)
+        return TextProblem{i, fmt::format("control character U+{:04X}", c)};
+      ++i;
+      continue;
+    }
+    // The length of the sequence and the range of its second byte (no
+    // overlong forms, no surrogates, nothing above U+10FFFF).
+    std::size_t len = 0;
+    unsigned lo = 0x80, hi = 0xBF;
+    if (c >= 0xC2 && c <= 0xDF) {
+      len = 2;
+    } else if (c >= 0xE0 && c <= 0xEF) {
+      len = 3;
+      if (c == 0xE0) lo = 0xA0;
+      if (c == 0xED) hi = 0x9F;
+    } else if (c >= 0xF0 && c <= 0xF4) {
+      len = 4;
+      if (c == 0xF0) lo = 0x90;
+      if (c == 0xF4) hi = 0x8F;
+    }
+    bool ok = len > 0 && i + len <= n && b[i + 1] >= lo && b[i + 1] <= hi;
+    for (std::size_t k = 2; ok && k < len; ++k) ok = b[i + k] >= 0x80 && b[i + k] <= 0xBF;
+    if (!ok) return TextProblem{i, fmt::format("not UTF-8 text: invalid byte 0x{:02X}", c)};
+    i += len;
+  }
+  return std::nullopt;
+}
+
+std::optional<TextProblem> nesting_problem(std::string_view text) {
+  enum class In { Code, Basic, Literal, MultiBasic, MultiLiteral, Comment };
+  In in = In::Code;
+  std::size_t depth = 0, dots = 0;
+  const std::size_t n = text.size();
+  const auto digit = [&](std::size_t i) {
+    return i < n && std::isdigit(static_cast<unsigned char>(text[i]));
+  };
+  const auto starts = [&](std::size_t i, const char* s) { return text.compare(i, 3, s) == 0; };
+  for (std::size_t i = 0; i < n; ++i) {
+    const char c = text[i];
+    switch (in) {
+      case In::Comment:
+        if (c == '\n') in = In::Code;
+        break;
+      case In::Basic:
+        if (c == '\\')
+          ++i;
+        else if (c == '"' || c == '\n')
+          in = In::Code;
+        break;
+      case In::Literal:
+        if (c == '\'' || c == '\n') in = In::Code;
+        break;
+      case In::MultiBasic:
+        if (c == '\\')
+          ++i;
+        else if (starts(i, "\"\"\""))
+          in = In::Code, i += 2;
+        break;
+      case In::MultiLiteral:
+        if (starts(i, "'''")) in = In::Code, i += 2;
+        break;
+      case In::Code:
+        if (c == '\n') {
+          dots = 0;
+        } else if (c == '#') {
+          in = In::Comment;
+        } else if (c == '"') {
+          in = starts(i, "\"\"\"") ? In::MultiBasic : In::Basic;
+          if (in == In::MultiBasic) i += 2;
+        } else if (c == '\'') {
+          in = starts(i, "'''") ? In::MultiLiteral : In::Literal;
+          if (in == In::MultiLiteral) i += 2;
+        } else if (c == '[' || c == '{') {
+          if (++depth > kMaxNesting)
+            return TextProblem{
+                i, fmt::format("arrays and inline tables nested more than {} deep", kMaxNesting)};
+        } else if (c == ']' || c == '}') {
+          if (depth > 0) --depth;
+        } else if (c == '.' && !(i > 0 && digit(i - 1) && digit(i + 1))) {
+          // A dot between digits is a number's; any other separates key parts.
+          if (++dots >= kMaxNesting)
+            return TextProblem{
+                i, fmt::format("a key of more than {} dotted parts on one line", kMaxNesting)};
+        }
+        break;
+    }
+  }
+  return std::nullopt;
 }
 
 }  // namespace scene_reader
 
 std::string closest_match(const std::string& word, const std::vector<std::string>& candidates) {
+  // Bounded work: no guess for a word or against a name longer than this
+  // (a guess is for typos), and only the first kMaxCandidates names.
+  constexpr std::size_t kMaxLength = 64, kMaxCandidates = 1000;
+  if (word.size() > kMaxLength) return "";
   std::string best;
   std::size_t best_d = std::string::npos;
-  for (const auto& c : candidates) {
+  for (std::size_t i = 0; i < candidates.size() && i < kMaxCandidates; ++i) {
+    const std::string& c = candidates[i];
+    if (c.size() > kMaxLength) continue;
     const std::size_t d = scene_reader::edit_distance(word, c);
     if (d < best_d) {
       best_d = d;
@@ -130,8 +276,9 @@ std::string closest_match(const std::string& word, const std::vector<std::string
   if (best_d <= allowed) return best;
   // Or an abbreviation: "newton_tol" -> "newton_tolerance".
   if (word.size() >= 3)
-    for (const auto& c : candidates)
-      if (c.size() > word.size() &&
+    for (std::size_t i = 0; i < candidates.size() && i < kMaxCandidates; ++i)
+      if (const std::string& c = candidates[i];
+          c.size() > word.size() &&
           scene_reader::edit_distance(word, c.substr(0, word.size())) == 0)
         return c;
   return "";

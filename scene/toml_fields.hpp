@@ -20,14 +20,43 @@ namespace emdae::scene_reader {
 
 /// 20.0 as "20.0", not "20": "must be an integer, received 20.0".
 std::string show_number(double x);
+/// Numbers a scene may hold: of magnitude at most kMaxMagnitude (a product
+/// of two still fits a double, where 1e308 overflows in the first residual)
+/// and not subnormal (whose inverse overflows). "" or what is wrong, ending
+/// in ", received ".
+constexpr double kMaxMagnitude = 1e100;
+std::string range_problem(double x);
 /// A value as it reads in the file, cut to `limit` characters.
 std::string show(const toml::node& n, std::size_t limit = 80);
 /// "string \"abc\"", "integer 3", "a table": for type errors.
 std::string show_typed(const toml::node& n);
 std::string join(const std::vector<std::string>& items, const char* sep = ", ");
 /// " (did you mean 'dt'? keys of [time]: dt, t_end)": the hint after a bad name.
+/// Bounded: long words get no guess and long lists are cut (kHintListed names).
 std::string hint(const std::string& word, const std::vector<std::string>& candidates,
                  const std::string& label);
+/// `s` cut to `limit` characters with "..." (a key or value quoted in a message).
+std::string cut(const std::string& s, std::size_t limit = 80);
+
+/// What a scene's text (or a --set value) may not hold: the first byte that
+/// is not UTF-8, or a control character other than tab, line feed and
+/// carriage return; `offset` is where it is.
+struct TextProblem {
+  std::size_t offset = 0;
+  std::string what;
+};
+std::optional<TextProblem> text_problem(std::string_view text);
+
+// Limits checked before toml++ sees the text: its parser recurses per dotted
+// key part and per nested array or inline table (a stack overflow for a
+// header of tens of thousands of parts), and a scene is a small file.
+constexpr std::size_t kMaxSceneBytes = 8u << 20;  // 8 MiB
+constexpr std::size_t kMaxNesting = 64;           // dotted parts of a key, nested [ and {
+/// Where the text nests too deep (a key of more than kMaxNesting parts, or
+/// arrays and inline tables more than kMaxNesting deep), and what.
+std::optional<TextProblem> nesting_problem(std::string_view text);
+/// Line and column (1-based) of byte `offset` in `text`.
+std::pair<std::size_t, std::size_t> line_column(std::string_view text, std::size_t offset);
 
 // Values given on the command line carry their origin ("--set key=value",
 // "--dt 0.1") as their source path, marked by this prefix, so that messages
@@ -108,6 +137,7 @@ class Fields {
     if (!n.is_number()) fail_at(n, k, "must be a number, received " + show_typed(n));
     const double x = n.value<double>().value_or(0.0);
     if (!std::isfinite(x)) fail_at(n, k, "must be a finite number, received " + show(n));
+    if (const std::string why = range_problem(x); !why.empty()) fail_at(n, k, why + show(n));
     return x;
   }
   double number(std::string_view k, const std::string& expected) const {
@@ -168,6 +198,8 @@ class Fields {
       if (!e.is_number()) fail_at(n, k, expected + ", received " + show(n));
       v[d] = e.value<double>().value_or(0.0);
       if (!std::isfinite(v[d])) fail_at(n, k, "must have finite components, received " + show(n));
+      if (const std::string why = range_problem(v[d]); !why.empty())
+        fail_at(n, k, "components " + why + show(n));
     }
     return v;
   }
@@ -204,6 +236,8 @@ class Fields {
       const toml::node& e = *a->get(i);
       if (!e.is_number() || !std::isfinite(e.value<double>().value_or(0.0)))
         fail_at(n, k, "must be a list of finite numbers, received " + show(n));
+      if (const std::string why = range_problem(e.value<double>().value_or(0.0)); !why.empty())
+        fail_at(n, k, "entries " + why + show(n));
       out.push_back(e.value<double>().value_or(0.0));
     }
     return out;

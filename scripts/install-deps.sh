@@ -12,6 +12,8 @@ packages=(
   python3-dev pybind11-dev python3-pytest python3-matplotlib
 )
 if [[ "${EMDAE_BROWSER_TESTS:-1}" == 1 ]]; then packages+=(chromium); fi
+# The fuzz targets (fuzz/, cmake --preset fuzz): clang with libFuzzer.
+if [[ "${EMDAE_FUZZ:-0}" == 1 ]]; then packages+=(clang-14 libclang-rt-14-dev); fi
 
 missing=()
 for p in "${packages[@]}"; do

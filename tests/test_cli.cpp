@@ -376,7 +376,10 @@ TEST(Verify, SummaryIsWrittenAtomicallyWithNulls) {
   const nlohmann::json j = read_json(dir / "summary.json");
   EXPECT_TRUE(j["linear_momentum_error_max"].is_null());
   EXPECT_NE(j["linear_momentum_note"].get<std::string>().find("fixed dofs"), std::string::npos);
-  EXPECT_EQ(j["checks"]["energy_rel"]["result"], "pass");
+  // No step taken: nothing to judge (issue #15: a zero-step run listed "pass").
+  EXPECT_EQ(j["checks"]["energy_rel"]["result"], "skipped");
+  EXPECT_NE(j["checks"]["energy_rel"]["note"].get<std::string>().find("took no step"),
+            std::string::npos);
   EXPECT_EQ(j["checks"]["linear_momentum"]["result"], "skipped");
   EXPECT_EQ(j["dofs"], 4);
   EXPECT_EQ(j["free_dofs"], 2);

@@ -1,5 +1,7 @@
 #include "verify/history.hpp"
 
+#include <unistd.h>
+
 #include <cerrno>
 #include <cstring>
 #include <stdexcept>
@@ -32,6 +34,19 @@ HistoryWriter::HistoryWriter(const std::string& path, int dim, bool external_wor
     std::fprintf(file_, "%s%s", i ? "," : "", columns[i].c_str());
   std::fputc('\n', file_);
   std::fflush(file_);
+}
+
+HistoryWriter::HistoryWriter(const std::string& path, int dim, bool external_work, bool contact,
+                             long offset, long rows)
+    : path_(path), dim_(dim), external_work_(external_work), contact_(contact), rows_(rows) {
+  file_ = std::fopen(path.c_str(), "r+");
+  if (!file_ || ::ftruncate(::fileno(file_), offset) != 0 ||
+      std::fseek(file_, offset, SEEK_SET) != 0)
+    throw std::runtime_error("cannot go on with history '" + path + "': " + std::strerror(errno));
+}
+
+long HistoryWriter::offset() const {
+  return file_ ? std::ftell(file_) : -1;
 }
 
 HistoryWriter::~HistoryWriter() {

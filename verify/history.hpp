@@ -41,6 +41,10 @@ class HistoryWriter {
   /// Creates (truncates) `path` and writes the header; throws
   /// std::runtime_error naming the path and the reason when it cannot.
   HistoryWriter(const std::string& path, int dim, bool external_work = false, bool contact = false);
+  /// Reopens `path` to go on after byte `offset` (a checkpoint's position,
+  /// after `rows` rows): what follows it, a killed run's later rows, is cut.
+  HistoryWriter(const std::string& path, int dim, bool external_work, bool contact, long offset,
+                long rows);
   ~HistoryWriter();
   HistoryWriter(const HistoryWriter&) = delete;
   HistoryWriter& operator=(const HistoryWriter&) = delete;
@@ -51,6 +55,8 @@ class HistoryWriter {
   void close();
 
   const std::string& path() const { return path_; }
+  /// Bytes written so far (every row is flushed).
+  long offset() const;
   long rows() const { return rows_; }
 
  private:

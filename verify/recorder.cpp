@@ -2,9 +2,13 @@
 
 #include <algorithm>
 #include <cmath>
+#include <istream>
+#include <ostream>
 #include <sstream>
 #include <utility>
 #include <vector>
+
+#include "verify/binary_io.hpp"
 
 namespace emdae {
 
@@ -271,6 +275,104 @@ std::string Recorder::angular_balance_note() const {
            "and supports";
   if (!(angular_size_max_ > 0)) return "absolute error: the angular momentum stayed zero";
   return "";
+}
+
+namespace {
+
+void put_sample(std::ostream& out, const Sample& s) {
+  using namespace binary;
+  put(out, s.step);
+  put(out, s.t);
+  put(out, s.dt);
+  put(out, s.quantities.kinetic);
+  put(out, s.quantities.potential);
+  put_vec(out, s.quantities.linear_momentum);
+  put_vec(out, s.quantities.angular_momentum);
+  put(out, s.quantities.phi_max);
+  put(out, s.newton_iterations);
+  put(out, s.cutbacks);
+  put(out, s.external_work);
+  put(out, s.energy_error);
+  put(out, s.linear_momentum_error);
+  put(out, s.angular_momentum_error);
+  put(out, s.active_contacts);
+  put(out, s.contact_events);
+  put(out, s.gap_violation);
+  put(out, s.penetration);
+}
+
+Sample get_sample(std::istream& in) {
+  using namespace binary;
+  Sample s;
+  s.step = get<long>(in);
+  s.t = get<double>(in);
+  s.dt = get<double>(in);
+  s.quantities.kinetic = get<double>(in);
+  s.quantities.potential = get<double>(in);
+  s.quantities.linear_momentum = get_vec(in);
+  s.quantities.angular_momentum = get_vec(in);
+  s.quantities.phi_max = get<double>(in);
+  s.newton_iterations = get<int>(in);
+  s.cutbacks = get<int>(in);
+  s.external_work = get<double>(in);
+  s.energy_error = get<double>(in);
+  s.linear_momentum_error = get<double>(in);
+  s.angular_momentum_error = get<double>(in);
+  s.active_contacts = get<int>(in);
+  s.contact_events = get<int>(in);
+  s.gap_violation = get<double>(in);
+  s.penetration = get<double>(in);
+  return s;
+}
+
+}  // namespace
+
+void Recorder::save(std::ostream& out) const {
+  using namespace binary;
+  put_sample(out, initial_);
+  put_sample(out, last_);
+  for (double x :
+       {energy_scale_, balance_scale_, angular_scale_, energy_error_max_, balance_error_max_,
+        free_ref_, free_ref_scale_, free_time_, free_error_max_, linear_balance_max_,
+        angular_balance_max_, angular_size_max_, gap_violation_max_, penetration_max_,
+        contact_first_, contact_last_, linear_error_max_, angular_error_max_, constraint_max_})
+    put(out, x);
+  put(out, in_free_);
+  put(out, free_intervals_);
+  put_vec(out, impulse_);
+  put_vec(out, angular_impulse_);
+  put(out, impulses_known_);
+  put(out, active_max_);
+  put(out, contact_events_);
+  put(out, newton_iterations_);
+  put(out, newton_max_per_step_);
+  put(out, cutbacks_);
+}
+
+void Recorder::restore(std::istream& in) {
+  using namespace binary;
+  Sample initial = get_sample(in), last = get_sample(in);
+  if (initial.quantities.linear_momentum.size() != initial_.quantities.linear_momentum.size() ||
+      initial.quantities.angular_momentum.size() != initial_.quantities.angular_momentum.size())
+    throw std::runtime_error("the checkpoint's recorder is of another system");
+  initial_ = std::move(initial);
+  last_ = std::move(last);
+  for (double* x :
+       {&energy_scale_, &balance_scale_, &angular_scale_, &energy_error_max_, &balance_error_max_,
+        &free_ref_, &free_ref_scale_, &free_time_, &free_error_max_, &linear_balance_max_,
+        &angular_balance_max_, &angular_size_max_, &gap_violation_max_, &penetration_max_,
+        &contact_first_, &contact_last_, &linear_error_max_, &angular_error_max_, &constraint_max_})
+    *x = get<double>(in);
+  in_free_ = get<bool>(in);
+  free_intervals_ = get<int>(in);
+  impulse_ = get_vec(in);
+  angular_impulse_ = get_vec(in);
+  impulses_known_ = get<bool>(in);
+  active_max_ = get<int>(in);
+  contact_events_ = get<long>(in);
+  newton_iterations_ = get<long>(in);
+  newton_max_per_step_ = get<int>(in);
+  cutbacks_ = get<long>(in);
 }
 
 }  // namespace emdae

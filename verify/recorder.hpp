@@ -43,6 +43,7 @@
 #pragma once
 
 #include <functional>
+#include <iosfwd>
 #include <limits>
 #include <optional>
 #include <string>
@@ -155,6 +156,12 @@ class Recorder {
   long newton_iterations() const { return newton_iterations_; }
   int newton_iterations_max_per_step() const { return newton_max_per_step_; }
   long cutbacks() const { return cutbacks_; }
+
+  /// Everything the recorder has gathered, as bits (a checkpoint): restore()
+  /// on a recorder of the same system makes it go on exactly as this one.
+  void save(std::ostream& out) const;
+  /// Throws std::runtime_error when the bits do not fit this system.
+  void restore(std::istream& in);
 
  private:
   /// Sets the errors of `s` and takes them into the maxima.

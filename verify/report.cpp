@@ -26,13 +26,45 @@ constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
 // --- the history table --------------------------------------------------------------
 
+// The cells of one CSV line, RFC 4180 quoting: a quoted cell may hold the
+// separator and doubled quotes ("a,""b""" is a,"b").
 std::vector<std::string> split(const std::string& line, char sep) {
-  std::vector<std::string> out;
-  std::string cell;
-  std::istringstream in(line);
-  while (std::getline(in, cell, sep)) out.push_back(cell);
-  if (!line.empty() && line.back() == sep) out.emplace_back();
+  std::vector<std::string> out(1);
+  bool quoted = false;
+  for (std::size_t i = 0; i < line.size(); ++i) {
+    const char c = line[i];
+    if (quoted) {
+      if (c != '"') {
+        out.back() += c;
+      } else if (i + 1 < line.size() && line[i + 1] == '"') {
+        out.back() += '"';
+        ++i;
+      } else {
+        quoted = false;
+      }
+    } else if (c == '"') {
+      quoted = true;
+    } else if (c == sep) {
+      out.emplace_back();
+    } else {
+      out.back() += c;
+    }
+  }
+  if (line.empty()) out.clear();
   return out;
+}
+
+// One CSV record of `in`: a line, joined with the next while a quoted cell
+// is open (a name with a line break). False at the end.
+bool read_record(std::istream& in, std::string& record) {
+  if (!std::getline(in, record)) return false;
+  const auto open = [](const std::string& r) {
+    return std::count(r.begin(), r.end(), '"') % 2 == 1;
+  };
+  std::string more;
+  while (open(record) && std::getline(in, more)) record += "\n" + more;
+  if (!record.empty() && record.back() == '\r') record.pop_back();
+  return true;
 }
 
 // Throws std::runtime_error naming the file and line. A short last line (a
@@ -520,10 +552,9 @@ std::optional<Figure> pressure_figure(const fs::path& path) {
   // Each pair's last node, to measure the arc length from.
   std::vector<std::pair<double, double>> last;
   std::vector<Series> series;
-  while (std::getline(in, line)) {
-    if (!line.empty() && line.back() == '\r') line.pop_back();
+  while (read_record(in, line)) {
     const auto cells = split(line, ',');
-    if (cells.size() != names.size()) continue;  // a quoted name with a comma: not drawn
+    if (cells.size() != names.size()) continue;  // a short last line (a killed run)
     auto it = std::find_if(series.begin(), series.end(),
                            [&](const Series& s) { return s.label == cells[pair]; });
     if (it == series.end()) {

@@ -245,6 +245,19 @@ void FieldWriter::write(const State& state, long step) {
     entries_.back().t = state.t;
   else
     entries_.push_back({state.t, file});
+  // The index as the run goes: a killed run's fields open in ParaView too.
+  write_pvd();
+}
+
+std::vector<std::pair<double, std::string>> FieldWriter::index() const {
+  std::vector<std::pair<double, std::string>> out;
+  for (const auto& e : entries_) out.emplace_back(e.t, e.file);
+  return out;
+}
+
+void FieldWriter::restore(const std::vector<std::pair<double, std::string>>& index) {
+  entries_.clear();
+  for (const auto& [t, file] : index) entries_.push_back({t, file});
 }
 
 void FieldWriter::add_point_scalar(std::string name, PointScalar field) {

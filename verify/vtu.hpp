@@ -53,8 +53,9 @@ class FieldWriter {
   FieldWriter(const FieldWriter&) = delete;
   FieldWriter& operator=(const FieldWriter&) = delete;
 
-  /// Writes the state of step `step` (0: the initial state). Throws
-  /// std::runtime_error naming the file when it cannot be written.
+  /// Writes the state of step `step` (0: the initial state) and the index
+  /// fields.pvd with it. Throws std::runtime_error naming the file when it
+  /// cannot be written.
   void write(const State& state, long step);
   /// Writes fields.pvd; further writes are refused.
   void close();
@@ -67,6 +68,10 @@ class FieldWriter {
   /// Path of the VTU file of `step`, relative to the output folder.
   static std::string file_name(long step);
   const std::string& pvd_path() const { return pvd_path_; }
+  /// The files of the index so far, (time, file): what a checkpoint keeps;
+  /// restore() makes a writer of the same bodies go on from them.
+  std::vector<std::pair<double, std::string>> index() const;
+  void restore(const std::vector<std::pair<double, std::string>>& index);
   long files_written() const { return static_cast<long>(entries_.size()); }
 
  private:

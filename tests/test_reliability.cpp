@@ -1,0 +1,510 @@
+// Reliability (issue #15): every defect found by trying emdae as a new user
+// would and by fuzzing, one test each. Bad input exits 2 (3 for a numerical
+// failure) with a message naming the file and line, or the option, and the
+// value; nothing hangs, nothing is written.
+#include <fcntl.h>
+#include <gtest/gtest.h>
+#include <sys/file.h>
+#include <sys/stat.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <csignal>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <string>
+
+#include "scene/scene.hpp"
+#include "temp_dir.hpp"
+#include "verify/report.hpp"
+
+namespace emdae {
+namespace {
+
+namespace fs = std::filesystem;
+
+using Result = test_systems::CommandResult;
+using test_systems::emdae;
+using test_systems::example;
+using test_systems::quote;
+using test_systems::read_json;
+using test_systems::read_text;
+using test_systems::TempDir;
+
+const std::string kValid =
+    "[time]\ndt = 0.01\nt_end = 0.1\n\n"
+    "[[particles]]\nname = \"a\"\nmass = 1.0\nposition = [0.0, 0.0]\n\n"
+    "[[particles]]\nname = \"b\"\nmass = 1.0\nposition = [1.0, 0.0]\n\n";
+
+bool has(const std::string& text, const std::string& part) {
+  return text.find(part) != std::string::npos;
+}
+
+// `emdae check` and `emdae run` of the scene file `content` both exit 2 with
+// every one of `expected` in the message, and write nothing.
+void expect_refused(const std::string& content, const std::vector<std::string>& expected) {
+  TempDir dir;
+  const std::string path = dir.write("scene.toml", content);
+  for (const char* command : {"check ", "run "}) {
+    const Result r = emdae(std::string(command) + quote(path), dir.path());
+    EXPECT_EQ(r.code, 2) << command << r.output.substr(0, 2000);
+    EXPECT_LT(r.output.size(), 4000u) << "a bounded message";
+    for (std::string want : expected) {
+      if (want.rfind("{path}", 0) == 0) want = path + want.substr(6);
+      EXPECT_TRUE(has(r.output, want)) << "expected '" << want << "' in\n"
+                                       << r.output.substr(0, 2000);
+    }
+  }
+  EXPECT_FALSE(fs::exists(dir / "out"));
+}
+
+// --- what toml++ 3.3.0 must not see ---------------------------------------------------
+
+TEST(Reliability, HeaderOfTensOfThousandsOfDottedPartsIsRefusedBeforeTheParser) {
+  std::string header = "[a";
+  while (header.size() < 100000) header += ".a";
+  expect_refused(header + "]\n", {"{path}:1:", "more than 64 dotted parts"});
+  // The same as a dotted key, on line 3.
+  std::string key = "x";
+  for (int i = 0; i < 20000; ++i) key += ".x";
+  expect_refused("[time]\ndt = 0.1\n" + key + " = 1\n", {"{path}:3:", "dotted parts"});
+}
+
+TEST(Reliability, DeeplyNestedValuesAreRefusedBeforeTheParser) {
+  expect_refused("x = " + std::string(50000, '[') + "\n", {"{path}:1:", "nested more than 64"});
+  expect_refused("x = " + std::string(50000, '{') + "\n", {"{path}:1:", "nested more than 64"});
+}
+
+TEST(Reliability, MalformedUtf8AndControlBytesInHeadersAreRefused) {
+  expect_refused(kValid + "[sce\xff\xfene]\n", {"{path}:15:5:", "not UTF-8", "0xFF"});
+  expect_refused(kValid + "[sce\xc0\xafne]\n", {"{path}:15:5:", "not UTF-8"});  // overlong '/'
+  expect_refused(kValid + "[sce\x01ne]\n", {"{path}:15:5:", "control character U+0001"});
+  expect_refused(kValid + "[sce\x1bne]\n", {"{path}:15:5:", "control character U+001B"});
+  // Characters count as one column each: "é" is two bytes.
+  expect_refused("# caf\xc3\xa9 \x7f\n", {"{path}:1:8:", "control character U+007F"});
+}
+
+TEST(Reliability, SceneLargerThanTheLimitIsRefusedUnread) {
+  expect_refused(std::string(9u << 20, '#'), {"{path}", "limit of 8388608 bytes"});
+}
+
+TEST(Reliability, DeviceAndPipeAreNotReadAsScenes) {
+  TempDir dir;
+  Result r = emdae("check /dev/zero", dir.path());
+  EXPECT_EQ(r.code, 2) << r.output;
+  EXPECT_TRUE(has(r.output, "/dev/zero: cannot read scene file: not a regular file")) << r.output;
+  const std::string fifo = dir / "pipe.toml";
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+  r = emdae("run " + quote(fifo), dir.path());
+  EXPECT_EQ(r.code, 2) << r.output;
+  EXPECT_TRUE(has(r.output, "not a regular file")) << r.output;
+  EXPECT_FALSE(fs::exists(dir / "out"));
+}
+
+// --- --set ---------------------------------------------------------------------------
+
+TEST(Reliability, SetIndexTooLargeForAnIntegerIsBadInput) {
+  TempDir dir;
+  const Result r = emdae("check " + quote(example("double_pendulum")) +
+                             " --set 'particles[99999999999999999999].mass=1'",
+                         dir.path());
+  EXPECT_EQ(r.code, 2) << r.output;
+  EXPECT_TRUE(has(r.output, "--set particles[99999999999999999999].mass=1")) << r.output;
+  EXPECT_TRUE(has(r.output, "out of range")) << r.output;
+  EXPECT_FALSE(has(r.output, "internal error")) << r.output;
+}
+
+TEST(Reliability, SetValueWithALineBreakControlCharacterOrInvalidUtf8IsBadInput) {
+  TempDir dir;
+  for (const auto& [value, what] :
+       std::vector<std::pair<std::string, std::string>>{{"0.1\nx = 2", "line break U+000A"},
+                                                        {"0.1\x01", "U+0001"},
+                                                        {"\"a\rb\"", "line break U+000D"},
+                                                        {"\xff", "0xFF"}}) {
+    const Result r =
+        emdae("run " + quote(example("double_pendulum")) + " --set " + quote("time.dt=" + value),
+              dir.path());
+    EXPECT_EQ(r.code, 2) << r.output;
+    EXPECT_TRUE(has(r.output, "--set time.dt=")) << r.output;
+    EXPECT_TRUE(has(r.output, what)) << r.output;
+    EXPECT_FALSE(has(r.output, "internal error")) << r.output;
+  }
+  EXPECT_FALSE(fs::exists(dir / "out"));
+}
+
+TEST(Reliability, SetOfAnUnknownSectionIsBlamedOnTheOptionNotOnTheFile) {
+  TempDir dir;
+  const std::string scene = example("double_pendulum");
+  const Result r = emdae("check " + quote(scene) + " --set a.b.c=1", dir.path());
+  EXPECT_EQ(r.code, 2) << r.output;
+  EXPECT_TRUE(has(r.output, "--set a.b.c=1: key 'a': unknown section")) << r.output;
+  EXPECT_FALSE(has(r.output, scene + ":1:1")) << r.output;
+}
+
+// --- hangs and unbounded memory --------------------------------------------------------
+
+TEST(Reliability, StepCountPastTheLimitIsRefusedAndTheLimitCanBeRaised) {
+  TempDir dir;
+  const std::string scene = quote(example("four_particle"));
+  Result r = emdae("run " + scene + " --t-end 1e9", dir.path());
+  EXPECT_EQ(r.code, 2) << r.output;
+  EXPECT_TRUE(has(r.output, "limits.max_steps = 10000000")) << r.output;
+  EXPECT_TRUE(has(r.output, "--set limits.max_steps=N")) << r.output;
+  // The smallest double and a huge end time: named with their option.
+  r = emdae("run " + scene + " --dt 5e-324", dir.path());
+  EXPECT_EQ(r.code, 2) << r.output;
+  EXPECT_TRUE(has(r.output, "--dt 5e-324: key 'time.dt'")) << r.output;
+  r = emdae("run " + scene + " --t-end 1e300", dir.path());
+  EXPECT_EQ(r.code, 2) << r.output;
+  EXPECT_TRUE(has(r.output, "--t-end 1e300: key 'time.t_end'")) << r.output;
+  EXPECT_FALSE(fs::exists(dir / "out"));
+  // check says what a run would take; the limit is the user's to raise.
+  r = emdae("check " + scene + " --set time.t_end=1e6", dir.path());
+  EXPECT_EQ(r.code, 2) << r.output;
+  r = emdae("check " + scene + " --set time.t_end=1e6 --set limits.max_steps=200000000",
+            dir.path());
+  EXPECT_EQ(r.code, 0) << r.output;
+  EXPECT_TRUE(has(r.output, "100000000 time steps (limits.max_steps = 200000000)")) << r.output;
+}
+
+TEST(Reliability, StudyWithATinyStepIsRefusedBeforeItRuns) {
+  TempDir dir;
+  const Result r =
+      emdae("study " + quote(example("double_pendulum")) + " --schemes em --dts 1e-9 --out o",
+            dir.path());
+  EXPECT_EQ(r.code, 2) << r.output;
+  EXPECT_TRUE(has(r.output, "limits.max_steps")) << r.output;
+  EXPECT_FALSE(fs::exists(dir / "o"));
+}
+
+TEST(Reliability, MeshTooLargeForTheMemoryLimitIsRefusedBeforeItIsBuilt) {
+  const std::string ring =
+      "[time]\ndt = 0.01\nt_end = 0.1\n[[bodies]]\nname = \"r\"\n[bodies.mesh]\n"
+      "type = \"ring\"\ncentre = [0.0, 0.0]\ninner_radius = 1.0\nouter_radius = 2.0\n"
+      "around = 100000\nthrough = 100\n"
+      "[bodies.material]\nmodel = \"svk\"\nyoung = 1.0\npoisson = 0.1\ndensity = 1.0\n";
+  expect_refused(ring, {"{path}:12:", "limits.max_memory_mb = 4096", "received 100"});
+  TempDir dir;
+  const Result r = emdae("check " + quote(example("ring_impact")), dir.path());
+  EXPECT_EQ(r.code, 0) << r.output;
+  EXPECT_TRUE(has(r.output, "2000 time steps")) << r.output;
+  EXPECT_TRUE(has(r.output, "MB for the elements (limits.max_memory_mb = 4096)")) << r.output;
+}
+
+// A Gmsh file: the format, then `body`.
+std::string gmsh(const std::string& body) {
+  return "$MeshFormat\n4.1 0 8\n$EndMeshFormat\n" + body;
+}
+
+std::string gmsh_scene(const std::string& file) {
+  return "[time]\ndt = 0.01\nt_end = 0.1\n[[bodies]]\nname = \"r\"\n[bodies.mesh]\n"
+         "type = \"gmsh\"\nfile = \"" +
+         file +
+         "\"\n[bodies.material]\nmodel = \"svk\"\nyoung = 1.0\npoisson = 0.1\ndensity = 1.0\n";
+}
+
+TEST(Reliability, GmshCountsBeyondTheFileSizeAreRefusedBeforeAllocating) {
+  TempDir dir;
+  dir.write("huge.msh", gmsh("$Nodes\n1 1000000000 1 1000000000\n2 1 0 1000000000\n1\n"
+                             "0 0 0\n$EndNodes\n"));
+  const std::string scene = dir.write("s.toml", gmsh_scene("huge.msh"));
+  const Result r = emdae("check " + quote(scene), dir.path());
+  EXPECT_EQ(r.code, 2) << r.output;
+  EXPECT_TRUE(has(r.output, "huge.msh:6: a node count 1000000000 cannot be right")) << r.output;
+  EXPECT_TRUE(has(r.output, scene + ":8:")) << r.output;
+}
+
+TEST(Reliability, GmshPhysicalNameWithoutQuotesNamesTheLine) {
+  TempDir dir;
+  dir.write("names.msh", gmsh("$PhysicalNames\n1\n1 1 outer\n$EndPhysicalNames\n"));
+  const Result r = emdae("check " + quote(dir.write("s.toml", gmsh_scene("names.msh"))));
+  EXPECT_EQ(r.code, 2) << r.output;
+  EXPECT_TRUE(has(r.output, "names.msh:6: expected a physical name in double quotes")) << r.output;
+  EXPECT_FALSE(has(r.output, "basic_string")) << r.output;
+}
+
+TEST(Reliability, GmshFileThatIsADeviceIsNotRead) {
+  TempDir dir;
+  const Result r = emdae("check " + quote(dir.write("s.toml", gmsh_scene("/dev/zero"))));
+  EXPECT_EQ(r.code, 2) << r.output;
+  EXPECT_TRUE(has(r.output, "/dev/zero: not a regular file")) << r.output;
+}
+
+TEST(Reliability, DidYouMeanOverManyLongNamesIsBounded) {
+  std::string scene = "[time]\ndt = 0.01\nt_end = 0.1\n";
+  const std::string stem(200, 'p');
+  for (int i = 0; i < 3000; ++i)
+    scene += "[[particles]]\nname = \"" + stem + std::to_string(i) +
+             "\"\nmass = 1.0\nposition = [" + std::to_string(i) + ".0, 0.0]\n";
+  scene += "[[links]]\nbetween = [\"" + stem + "0\", \"" + std::string(5000, 'q') + "\"]\n";
+  expect_refused(scene, {"unknown particle", "and 2980 more"});
+  // An unknown key of 100 000 characters is shown cut.
+  expect_refused(kValid + "[scheme]\n" + std::string(100000, 'k') + " = 1\n",
+                 {"{path}:16:", "unknown key"});
+}
+
+// --- silent wrong runs ------------------------------------------------------------------
+
+TEST(Reliability, BodiesOverlappingAtTheStartAreRefused) {
+  TempDir dir;
+  const Result r = emdae("run " + quote(example("ring_impact")) +
+                             " --set 'bodies[0].mesh.centre=[-40.0, 0.0]'"
+                             " --set 'bodies[1].mesh.centre=[40.0, 20.0]'",
+                         dir.path());
+  EXPECT_EQ(r.code, 2) << r.output;
+  EXPECT_TRUE(has(r.output, example("ring_impact") + ":")) << r.output;
+  EXPECT_TRUE(has(r.output, "overlap at the start")) << r.output;
+  EXPECT_FALSE(fs::exists(dir / "out"));
+}
+
+TEST(Reliability, EmptyOptionValuesAreRefusedNotIgnored) {
+  TempDir dir;
+  const std::string scene = quote(example("four_particle"));
+  for (const char* option : {"--dt", "--scheme", "--out", "--t-end", "--set"}) {
+    const Result r = emdae("run " + scene + " " + option + " ''", dir.path());
+    EXPECT_EQ(r.code, 2) << option << "\n" << r.output;
+    EXPECT_TRUE(has(r.output, option)) << r.output;
+    EXPECT_TRUE(has(r.output, "empty value")) << r.output;
+  }
+  const Result r = emdae("study " + scene + " --schemes em --dts ''", dir.path());
+  EXPECT_EQ(r.code, 2) << r.output;
+  EXPECT_FALSE(fs::exists(dir / "out"));
+}
+
+TEST(Reliability, ValuesThatOverflowInTheSolveAreNamed) {
+  TempDir dir;
+  const std::string scene = quote(example("four_particle"));
+  for (const auto& [value, shown] : std::vector<std::pair<std::string, std::string>>{
+           {"1e308", "1e+308"}, {"1e-310", "1e-310"}, {"-1e200", "-1e+200"}}) {
+    const Result r = emdae("run " + scene + " --set 'particles[0].mass=" + value + "'", dir.path());
+    EXPECT_EQ(r.code, 2) << value << "\n" << r.output;
+    EXPECT_TRUE(has(r.output, "key 'particles[0].mass'")) << r.output;
+    EXPECT_TRUE(has(r.output, "received " + shown)) << r.output;
+  }
+  const Result r =
+      emdae("run " + scene + " --set 'particles[0].position=[1e300, 0.0, 0.0]'", dir.path());
+  EXPECT_EQ(r.code, 2) << r.output;
+  EXPECT_TRUE(has(r.output, "particles[0].position")) << r.output;
+  EXPECT_FALSE(fs::exists(dir / "out"));
+}
+
+TEST(Reliability, FailedRunDoesNotListItsChecksAsPassed) {
+  TempDir dir;
+  const Result r = emdae("run " + quote(example("stiff_pendulum")) +
+                             " --set scheme.newton_max_iterations=1 --set time.min_dt=0.05"
+                             " --set tolerances.energy_rel=1 --out o",
+                         dir.path());
+  EXPECT_EQ(r.code, 3) << r.output;
+  const nlohmann::json s = read_json(dir / "o/summary.json");
+  EXPECT_EQ(s["checks"]["energy_rel"]["result"], "skipped") << s;
+  EXPECT_TRUE(has(s["checks"]["energy_rel"]["note"].get<std::string>(), "not judged")) << s;
+  EXPECT_FALSE(has(r.output, "pass:")) << r.output;
+}
+
+// --- the report reads its CSV files as CSV ---------------------------------------------------
+
+TEST(Reliability, ContactNameWithACommaKeepsItsLegend) {
+  TempDir dir;
+  dir.write("history.csv", "t,dt,kinetic,potential,total_energy\n0,0,1,0,1\n1,1,1,0,1\n");
+  dir.write("contact.csv",
+            "pair,node,x,y,gap,pressure,weight,force\n"
+            "\"upper, lower\",0,0.25,0,0,2,1,2\n\"upper, lower\",1,0.75,0,0,3,1,3\n");
+  ReportInfo info;
+  info.scene_name = "csv";
+  info.scheme = "em";
+  info.files.push_back("contact.csv");
+  write_report(dir.path().string(), info, Summary{});
+  EXPECT_TRUE(has(read_text(dir / "report.html"), "upper, lower"));
+}
+
+}  // namespace
+}  // namespace emdae
+
+namespace emdae {
+namespace {
+
+// --- the output folder: one run's, clean, saying while it runs that it is not over ---------
+
+// emdae with `args`, started in the background; its pid.
+pid_t start(const std::string& args, const fs::path& cwd) {
+  const pid_t pid = ::fork();
+  if (pid == 0) {
+    const std::string cmd =
+        "cd " + quote(cwd.string()) + " && exec " + quote(EMDAE_EXE) + " " + args + " 2>/dev/null";
+    ::execl("/bin/sh", "sh", "-c", cmd.c_str(), static_cast<char*>(nullptr));
+    ::_exit(127);
+  }
+  return pid;
+}
+
+std::size_t lines_of(const fs::path& file) {
+  std::ifstream in(file);
+  std::size_t n = 0;
+  for (std::string line; std::getline(in, line);) ++n;
+  return n;
+}
+
+// Waits (polling, not timing) until `ready` holds or the process has ended;
+// true when it holds while the process still runs.
+template <class Ready>
+bool wait_until(pid_t pid, Ready ready) {
+  while (true) {
+    if (ready()) return true;
+    int status = 0;
+    if (::waitpid(pid, &status, WNOHANG) == pid) return false;
+    ::usleep(2000);
+  }
+}
+
+int wait_exit(pid_t pid) {
+  int status = 0;
+  ::waitpid(pid, &status, 0);
+  return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+}
+
+TEST(OutputFolder, AnotherRunHoldingTheFolderIsRefused) {
+  TempDir dir;
+  fs::create_directories(dir / "o");
+  const int fd = ::open((dir / "o/.emdae.lock").c_str(), O_RDWR | O_CREAT, 0644);
+  ASSERT_GE(fd, 0);
+  ASSERT_EQ(::flock(fd, LOCK_EX | LOCK_NB), 0);
+  const Result r =
+      emdae("run " + quote(example("four_particle")) + " --t-end 0.1 --out o", dir.path());
+  ::close(fd);
+  EXPECT_EQ(r.code, 2) << r.output;
+  EXPECT_TRUE(has(r.output, "in use by another emdae run")) << r.output;
+  EXPECT_FALSE(fs::exists(dir / "o/history.csv"));
+}
+
+TEST(OutputFolder, ASecondRunReplacesTheFirstRunsOutputWhole) {
+  TempDir dir;
+  Result r = emdae("run " + quote(example("patch_test")) + " -q --out o", dir.path());
+  ASSERT_EQ(r.code, 0) << r.output;
+  ASSERT_TRUE(fs::exists(dir / "o/contact.csv"));
+  ASSERT_TRUE(fs::exists(dir / "o/fields.pvd"));
+  r = emdae("run " + quote(example("four_particle")) + " -q --t-end 0.1 --out o", dir.path());
+  ASSERT_EQ(r.code, 0) << r.output;
+  EXPECT_FALSE(fs::exists(dir / "o/contact.csv"));
+  EXPECT_FALSE(fs::exists(dir / "o/fields.pvd"));
+  EXPECT_FALSE(fs::exists(dir / "o/fields"));
+  EXPECT_EQ(read_json(dir / "o/summary.json")["scene"], "four_particle");
+}
+
+TEST(OutputFolder, FilesEmdaeDidNotWriteNeedForceAndAreKept) {
+  TempDir dir;
+  dir.write("notes.txt", "mine");
+  const std::string run = "run " + quote(example("four_particle")) + " -q --t-end 0.1 --out .";
+  Result r = emdae(run, dir.path());
+  EXPECT_EQ(r.code, 2) << r.output;
+  EXPECT_TRUE(has(r.output, "holds 'notes.txt'")) << r.output;
+  EXPECT_TRUE(has(r.output, "--force")) << r.output;
+  EXPECT_FALSE(fs::exists(dir / "history.csv"));
+  r = emdae(run + " --force", dir.path());
+  EXPECT_EQ(r.code, 0) << r.output;
+  EXPECT_TRUE(fs::exists(dir / "history.csv"));
+  EXPECT_EQ(read_text(dir / "notes.txt"), "mine");
+}
+
+TEST(OutputFolder, AKilledRunSaysItIsNotOverAndKeepsItsFieldIndex) {
+  TempDir dir;
+  const pid_t pid = start(
+      "run " + quote(example("free_ring")) + " -q --set output.vtu_every=1 --out o", dir.path());
+  const bool running = wait_until(pid, [&] { return lines_of(dir / "o/history.csv") > 20; });
+  ::kill(pid, SIGKILL);
+  wait_exit(pid);
+  ASSERT_TRUE(running) << "the run ended before it could be killed";
+  const nlohmann::json s = read_json(dir / "o/summary.json");
+  EXPECT_EQ(s["status"], "running");
+  const std::string pvd = read_text(dir / "o/fields.pvd");
+  EXPECT_TRUE(has(pvd, "fields/step_0000010.vtu")) << pvd;
+}
+
+TEST(OutputFolder, CtrlCDuringAStaticAnalysisKeepsHistoryAndSummary) {
+  TempDir dir;
+  const pid_t pid = start(
+      "run " + quote(example("hertz")) + " -q --set statics.increments=2000 --out o", dir.path());
+  const bool running = wait_until(pid, [&] { return lines_of(dir / "o/history.csv") > 3; });
+  ::kill(pid, SIGINT);
+  const int code = wait_exit(pid);
+  ASSERT_TRUE(running) << "the analysis ended before it could be interrupted";
+  EXPECT_EQ(code, 130);
+  const nlohmann::json s = read_json(dir / "o/summary.json");
+  EXPECT_TRUE(has(s["status"].get<std::string>(), "interrupted at load increment")) << s;
+  EXPECT_TRUE(fs::exists(dir / "o/report.html"));
+}
+
+TEST(OutputFolder, AFullDiskWhileWritingFieldsIsNotASuccess) {
+  TempDir dir;
+  // A file size limit stands for a full disk: writes past it fail (EFBIG).
+  const Result r = test_systems::shell("cd " + quote(dir.path().string()) +
+                                       " && trap '' XFSZ && ulimit -f 64 && exec " +
+                                       quote(EMDAE_EXE) + " run " + quote(example("free_ring")) +
+                                       " -q --t-end 0.2 --set output.vtu_every=1 --out o");
+  EXPECT_EQ(r.code, 1) << r.output;
+  EXPECT_TRUE(has(r.output, "output incomplete")) << r.output;
+}
+
+// --- checkpoints -------------------------------------------------------------------------
+
+// The summary without what differs between any two runs (CPU time).
+nlohmann::json without_cpu(nlohmann::json j) {
+  if (j.is_object()) {
+    for (auto it = j.begin(); it != j.end();) {
+      if (it.key().find("cpu") != std::string::npos) {
+        it = j.erase(it);
+      } else {
+        *it = without_cpu(*it);
+        ++it;
+      }
+    }
+  }
+  return j;
+}
+
+// Runs `args` whole into `whole`, and again into `killed`, SIGKILLed once its
+// history has `kill_after` lines and a checkpoint exists, then resumed: the
+// two histories and summaries must be the same, bit for bit.
+void expect_resumed_run_equals_the_whole(const std::string& args, std::size_t kill_after) {
+  TempDir dir;
+  Result r = emdae(args + " -q --out whole", dir.path());
+  ASSERT_EQ(r.code, 0) << r.output;
+  const pid_t pid = start(args + " -q --out killed", dir.path());
+  const bool running = wait_until(pid, [&] {
+    return fs::exists(dir / "killed/checkpoint/state.bin") &&
+           lines_of(dir / "killed/history.csv") > kill_after;
+  });
+  ::kill(pid, SIGKILL);
+  wait_exit(pid);
+  ASSERT_TRUE(running) << "the run ended before it could be killed";
+  EXPECT_EQ(read_json(dir / "killed/summary.json")["status"], "running");
+  EXPECT_NE(read_text(dir / "killed/history.csv"), read_text(dir / "whole/history.csv"));
+  r = emdae("run --resume killed -q", dir.path());
+  ASSERT_EQ(r.code, 0) << r.output;
+  EXPECT_EQ(read_text(dir / "killed/history.csv"), read_text(dir / "whole/history.csv"));
+  const nlohmann::json whole = without_cpu(read_json(dir / "whole/summary.json"));
+  const nlohmann::json resumed = without_cpu(read_json(dir / "killed/summary.json"));
+  EXPECT_EQ(whole.dump(), resumed.dump());
+  EXPECT_EQ(read_text(dir / "killed/contact.csv"), read_text(dir / "whole/contact.csv"));
+}
+
+TEST(Checkpoint, KilledContactRunResumesBitForBit) {
+  expect_resumed_run_equals_the_whole(
+      "run " + quote(example("ring_impact")) + " --t-end 9 --checkpoint-every 100", 450);
+}
+
+TEST(Checkpoint, KilledRunAfterAStaticPrestressResumesBitForBit) {
+  expect_resumed_run_equals_the_whole(
+      "run " + quote(example("bearing")) + " --t-end 0.6 --checkpoint-every 10", 35);
+}
+
+TEST(Checkpoint, ResumeWithoutACheckpointIsBadInput) {
+  TempDir dir;
+  const Result r = emdae("run --resume nowhere", dir.path());
+  EXPECT_EQ(r.code, 2) << r.output;
+  EXPECT_TRUE(has(r.output, "--resume nowhere")) << r.output;
+  EXPECT_TRUE(has(r.output, "no checkpoint")) << r.output;
+}
+
+}  // namespace
+}  // namespace emdae
