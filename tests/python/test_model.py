@@ -34,18 +34,25 @@ def test_double_pendulum_built_in_python_equals_its_scene():
     assert np.abs(np.linalg.norm(lower - upper, axis=1) - 1).max() < 1e-9
 
 
-def test_ring_impact_built_in_python_equals_its_scene():
+def two_rings(t_end, **contact):
+    """The ring impact of RING_SHORT built by calls: 32 x 1 elements per ring,
+    dt 0.05, contact "rings" with the options given."""
     svk = emdae.material("svk", 100.0, 0.1, 0.001)
     model = emdae.Model(2)
     model.add_body("left", emdae.ring_mesh([-110.0, 0.0], 47.0, 50.0, 32, 1), svk,
                    velocity=[10.0, 0.0])
     model.add_body("right", emdae.ring_mesh([110.0, 20.0], 47.0, 50.0, 32, 1), svk,
                    velocity=[-10.0, 0.0])
-    model.add_contact("left.outer", "right.outer", name="rings")
+    model.add_contact("left.outer", "right.outer", name="rings", **contact)
     settings = emdae.RunSettings()
     settings.time.dt = 0.05
-    settings.time.t_end = 7.0
+    settings.time.t_end = t_end
     settings.schemes.newton.max_iterations = 25
+    return model, settings
+
+
+def test_ring_impact_built_in_python_equals_its_scene():
+    model, settings = two_rings(7.0)
 
     built = emdae.run(model, settings)
     scene = emdae.run(emdae.load(EXAMPLES / "ring_impact.toml", RING_SHORT))
@@ -81,17 +88,7 @@ def test_loads_dirichlet_and_time_functions():
 
 
 def test_modified_mass_contact_built_in_python_equals_the_scene_key():
-    svk = emdae.material("svk", 100.0, 0.1, 0.001)
-    model = emdae.Model(2)
-    model.add_body("left", emdae.ring_mesh([-110.0, 0.0], 47.0, 50.0, 32, 1), svk,
-                   velocity=[10.0, 0.0])
-    model.add_body("right", emdae.ring_mesh([110.0, 20.0], 47.0, 50.0, 32, 1), svk,
-                   velocity=[-10.0, 0.0])
-    model.add_contact("left.outer", "right.outer", name="rings", modified_mass=True)
-    settings = emdae.RunSettings()
-    settings.time.dt = 0.05
-    settings.time.t_end = 6.5
-    settings.schemes.newton.max_iterations = 25
+    model, settings = two_rings(6.5, modified_mass=True)
     built = emdae.run(model, settings)
     overrides = dict(RING_SHORT, **{"time.t_end": 6.5, "contacts[0].modified_mass": True})
     scene = emdae.run(emdae.load(EXAMPLES / "ring_impact.toml", overrides))
@@ -100,17 +97,7 @@ def test_modified_mass_contact_built_in_python_equals_the_scene_key():
 
 
 def test_penalty_contact_built_in_python_equals_the_scene_key():
-    svk = emdae.material("svk", 100.0, 0.1, 0.001)
-    model = emdae.Model(2)
-    model.add_body("left", emdae.ring_mesh([-110.0, 0.0], 47.0, 50.0, 32, 1), svk,
-                   velocity=[10.0, 0.0])
-    model.add_body("right", emdae.ring_mesh([110.0, 20.0], 47.0, 50.0, 32, 1), svk,
-                   velocity=[-10.0, 0.0])
-    model.add_contact("left.outer", "right.outer", name="rings", penalty=10.0)
-    settings = emdae.RunSettings()
-    settings.time.dt = 0.05
-    settings.time.t_end = 6.5
-    settings.schemes.newton.max_iterations = 25
+    model, settings = two_rings(6.5, penalty=10.0)
     built = emdae.run(model, settings)
     overrides = dict(RING_SHORT, **{"time.t_end": 6.5, "contacts[0].penalty": 10.0})
     scene = emdae.run(emdae.load(EXAMPLES / "ring_impact.toml", overrides))
