@@ -487,13 +487,16 @@ void bind_model(py::module_& m) {
           mm = MaterialModel::SaintVenantKirchhoff;
         else if (model == "neo-hooke")
           mm = MaterialModel::NeoHooke;
+        else if (model == "linear")
+          mm = MaterialModel::Linear;
         else
-          throw ModelError("model",
-                           "unknown material model \"" + model + "\" (models: svk, neo-hooke)");
+          throw ModelError(
+              "model", "unknown material model \"" + model + "\" (models: svk, neo-hooke, linear)");
         return make_material(mm, young, poisson, density);
       },
       py::arg("model"), py::arg("young"), py::arg("poisson"), py::arg("density"),
-      "A material: model 'svk' or 'neo-hooke', Young's modulus, Poisson's ratio, density.");
+      "A material: model 'svk', 'neo-hooke' or 'linear' (small strain, not frame-indifferent), "
+      "Young's modulus, Poisson's ratio, density.");
 
   py::class_<Model>(m, "Model",
                     "What a scene declares, built by calls: particles, springs, links, FE "

@@ -148,7 +148,7 @@ Material Builder::material(const Fields& f) const {
       model = parse_material_model(*name);
     } catch (const std::invalid_argument&) {
       m.fail_key("model", "unknown material model, received " + show(*m.find("model")) +
-                              hint(*name, {"svk", "neo-hooke"}, "models"));
+                              hint(*name, {"svk", "neo-hooke", "linear"}, "models"));
     }
   }
   const double young = m.positive("young", "Young's modulus E, a positive number");
