@@ -41,6 +41,7 @@ struct ExampleRun {
 
 // Scenes with their own scheme; the bearings shortened to the torque and after.
 const std::vector<ExampleRun> kRuns = {
+    {"bar_impact_linear", "bar_impact_linear", ""},
     {"bearing", "bearing", "--t-end 1"},
     {"bearing_rollers", "bearing_rollers", "--t-end 1"},
     {"double_pendulum", "double_pendulum", ""},

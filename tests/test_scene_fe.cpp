@@ -18,6 +18,7 @@
 #include <string>
 #include <vector>
 
+#include "core/fe_element.hpp"
 #include "core/quantities.hpp"
 #include "fe_scenes.hpp"
 #include "integrators/driver.hpp"
@@ -82,6 +83,10 @@ std::vector<Malformed> malformed_fe_scenes() {
        with(kValid, "model = \"svk\"", "model = \"neohook\""),
        "neohook",
        {"key 'bodies[0].material.model'", "did you mean 'neo-hooke'?", "received \"neohook\""}},
+      {"unknown_model_near_linear",
+       with(kValid, "model = \"svk\"", "model = \"linar\""),
+       "linar",
+       {"key 'bodies[0].material.model'", "did you mean 'linear'?", "received \"linar\""}},
       {"unknown_edge_set",
        with(kValid, "slave = \"a.outer\"", "slave = \"a.outr\""),
        "a.outr",
@@ -579,6 +584,29 @@ TEST(ExamplesFe, EveryExampleSceneLoadsWithoutWarnings) {
   EXPECT_GE(scenes, 10);  // among them patch_test and hertz
   EXPECT_TRUE(fs::exists(example("patch_test")));
   EXPECT_TRUE(fs::exists(example("hertz")));
+}
+
+// model = "linear" builds the small-strain elements: strain invariants (a
+// translation changes none, a rotation does), no rotational symmetry, and
+// the system is not said to conserve angular momentum.
+TEST(ExamplesFe, BarImpactLinearHasTheLinearMaterial) {
+  const auto scene = load_scene(example("bar_impact_linear"));
+  const System& s = scene->system();
+  ASSERT_EQ(scene->model->bodies().size(), 2u);
+  int elements = 0;
+  for (const auto& term : s.potentials()) {
+    const auto* e = dynamic_cast<const Q1Element*>(term.get());
+    ASSERT_NE(e, nullptr);
+    EXPECT_EQ(e->material().model, MaterialModel::Linear);
+    EXPECT_TRUE(e->quadratic_in_invariants());
+    ++elements;
+  }
+  EXPECT_EQ(elements, 2 * 40 * 2);
+  EXPECT_TRUE(s.symmetry().translation);
+  EXPECT_FALSE(s.symmetry().rotation);
+  const Conservation c = conservation_of(s);
+  EXPECT_TRUE(c.linear);
+  EXPECT_EQ(c.angular_reason, "not conserved: the system has linear elastic Q1 element terms");
 }
 
 TEST(ExamplesFe, HertzIsTheTestsMediumMesh) {

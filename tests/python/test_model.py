@@ -137,3 +137,31 @@ def test_static_patch_test_built_in_python_equals_its_scene():
     settings.statics.enabled = False
     with pytest.raises(emdae.InputError, match="statics.enabled"):
         emdae.run(model, settings)
+
+
+def test_linear_material_built_in_python_equals_its_scene():
+    # The small-strain material by name: the patch test in it equals the
+    # scene with model = "linear", and its pressure is still uniform.
+    model = emdae.Model(2)
+    linear = emdae.material("linear", 100.0, 0.3, 1.0)
+    model.add_body("lower", emdae.rectangle_mesh([0.0, 0.0], 2.0, 1.0, 5, 3), linear)
+    model.add_body("upper", emdae.rectangle_mesh([0.0, 1.0], 2.0, 1.0, 7, 3), linear)
+    model.add_contact("upper.bottom", "lower.top", name="interface")
+    model.fix("lower.bottom", components="y")
+    model.prescribe_displacement("upper.top", [0.0, -0.02],
+                                 emdae.TimeFunction.ramp(0.0, 1.0, 1.0), components="y")
+    settings = emdae.RunSettings()
+    settings.static_only = True
+    settings.statics.enabled = True
+    settings.statics.settings.load_time = 1.0
+    settings.statics.settings.newton.tolerance = 1e-12
+
+    built = emdae.run(model, settings)
+    overrides = {f"bodies[{i}].material.model": "linear" for i in (0, 1)}
+    scene = emdae.run(emdae.load(EXAMPLES / "patch_test.toml", overrides))
+    assert built.end == "finished"
+    assert np.array_equal(built.history_table, scene.history_table)
+    p = built.contact["pressure"]
+    assert p.size > 0 and (p.max() - p.min()) / abs(p.mean()) < 1e-8
+    with pytest.raises(emdae.ModelError):
+        emdae.material("linar", 100.0, 0.3, 1.0)
