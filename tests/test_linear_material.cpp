@@ -19,6 +19,7 @@
 #include "core/model.hpp"
 #include "run/run.hpp"
 #include "verify/recorder.hpp"
+#include "verify/study_measures.hpp"
 
 namespace emdae {
 namespace {
@@ -150,6 +151,21 @@ TEST(LinearMaterial, NotFrameIndifferent) {
   EXPECT_NE(c.angular_reason.find("linear elastic Q1 element terms"), std::string::npos)
       << c.angular_reason;
   EXPECT_EQ(c.angular_reason.find("element 1"), std::string::npos) << c.angular_reason;  // once
+  // A study's deformation energy V_int (verify/study_measures.hpp) still
+  // counts these elements: here all of the potential, 2 (lambda + mu)
+  // (1 - cos theta)^2 times the area 2 after a rotation by theta = 0.3.
+  const System& s = model.system();
+  Vec q = s.initial_positions();
+  const double theta = 0.3;
+  for (int a = 0; a < s.n_nodes(); ++a) {
+    const Eigen::Vector2d x = q.segment<2>(2 * a);
+    q.segment<2>(2 * a) = Eigen::Vector2d(std::cos(theta) * x.x() - std::sin(theta) * x.y(),
+                                          std::sin(theta) * x.x() + std::cos(theta) * x.y());
+  }
+  const double expected =
+      2.0 * 2.0 * (kLinear.lambda + kLinear.mu) * std::pow(1.0 - std::cos(theta), 2);
+  EXPECT_NEAR(internal_potential(s, q, 0.0), expected, 1e-12 * expected);
+  EXPECT_NEAR(potential_energy(s, q, 0.0), expected, 1e-12 * expected);
 }
 
 // The energy is quadratic in q, so the discrete gradient (paper eq. (35))
