@@ -69,6 +69,24 @@ Eigen::Matrix2d hooke(const Material& m, const Eigen::Matrix2d& eps) {
   return m.lambda * eps.trace() * Eigen::Matrix2d::Identity() + 2.0 * m.mu * eps;
 }
 
+// The name in scenes and messages, and its Lame parameters.
+TEST(LinearMaterial, NameAndParameters) {
+  EXPECT_EQ(material_model_name(MaterialModel::Linear), "linear");
+  EXPECT_EQ(parse_material_model("linear"), MaterialModel::Linear);
+  EXPECT_EQ(parse_material_model("linear-elastic"), MaterialModel::Linear);
+  try {
+    parse_material_model("hooke");
+    ADD_FAILURE() << "no exception";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("linear"), std::string::npos) << e.what();
+  }
+  EXPECT_NEAR(kLinear.lambda, 100.0 * 0.3 / (1.3 * 0.4), 1e-12);
+  EXPECT_NEAR(kLinear.mu, 100.0 / 2.6, 1e-12);
+  EXPECT_TRUE(kLinear.quadratic_in_invariants());
+  EXPECT_TRUE(kLinear.small_strain());
+  EXPECT_NE(kLinear.describe().find("linear (E = 100"), std::string::npos) << kLinear.describe();
+}
+
 // A uniform displacement gradient G (with a skew part) on a general quad:
 // the Q1 element reproduces it exactly, so the element's energy is the area
 // times W(eps), eps = sym(G), its nodal forces are int sigma grad N (sigma =
