@@ -272,8 +272,9 @@ TEST(Mesh, BoundarySetsAreOrientedWithOutwardNormals) {
 }
 
 // Solid disk, half and quarter (disk_mesh): every quad convex and
-// counter-clockwise with interior angles within [45, 150] degrees (the
-// O-grid's worst are the 135-degree corners of the central square); the
+// counter-clockwise with interior angles within [45, 135] degrees (135: where
+// the central square's corners face the diagonals; the smallest, 47.5 on a
+// 64 x 20 disk, 61 on this one, where the radial lines skew); the
 // area converges to the sector's pi R^2 / 4 per quadrant as the inscribed
 // polygon's does; the sets cover the boundary with outward normals: the arc
 // radially, each cut along its side's normal, the cuts exactly on the lines
@@ -311,7 +312,7 @@ TEST(Mesh, DiskHalfAndQuarterAreMappedWithoutBadElements) {
       }
     }
     EXPECT_GE(worst_min, 45.0) << what;
-    EXPECT_LE(worst_max, 150.0) << what;
+    EXPECT_LE(worst_max, 135.0 + 1e-9) << what;
     // The polygon inscribed in the arc: per quarter, per_quarter chords.
     const double polygon =
         k.quadrants * per_quarter * 0.5 * r * r * std::sin(0.5 * pi / per_quarter);
