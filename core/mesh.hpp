@@ -72,8 +72,9 @@ Mesh rectangle_mesh(const Eigen::Vector2d& origin, double width, double height, 
 /// ring elements; per_quarter elements along each quarter of the circle
 /// (equal angles), so per_quarter must be even. The square's corners face
 /// the diagonals, where two ring elements meet at 135 degrees; no element is
-/// degenerate (interior angles between about 45 and 135 degrees). Nodes on the circle lie on it to
-/// round-off, nodes on the straight cuts exactly on the lines through the centre.
+/// degenerate (interior angles between about 45 and 135 degrees). Nodes on
+/// the circle lie on it to round-off, nodes on the straight cuts exactly on
+/// the lines through the centre.
 ///
 /// The sector is `quadrants` (1 .. 4) quadrants starting at quadrant
 /// `first_quadrant` (quadrant q spans the angles 90 q .. 90 (q + 1) degrees,
