@@ -87,6 +87,20 @@ def test_loads_dirichlet_and_time_functions():
     assert result.positions("beam")[-1, :, 1].min() < -1e-3  # it bends down
 
 
+def test_half_disk_mesh_has_its_cut_and_arc():
+    # The right half (quadrants -1 and 0): 2 x (2^2 + 4 x 3) elements, the
+    # arc at radius 2, the cut on x = 1 exactly, the centre node at the centre.
+    mesh = emdae.disk_mesh([1.0, -1.0], 2.0, 4, 3, first_quadrant=-1, quadrants=2)
+    assert mesh.n_elements == 2 * (4 + 4 * 3)
+    assert set(mesh.node_sets) == {"centre", "left", "outer"}
+    nodes = mesh.nodes
+    assert nodes[:, 0].min() == 1.0
+    radii = np.hypot(nodes[:, 0] - 1.0, nodes[:, 1] + 1.0)
+    assert abs(radii.max() - 2.0) < 1e-14
+    full = emdae.disk_mesh([0.0, 0.0], 1.0, 4, 3)
+    assert full.n_elements == 4 * (4 + 4 * 3) and "left" not in full.node_sets
+
+
 def test_modified_mass_contact_built_in_python_equals_the_scene_key():
     model, settings = two_rings(6.5, modified_mass=True)
     built = emdae.run(model, settings)
