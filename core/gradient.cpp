@@ -147,6 +147,12 @@ void discrete_gradient(const Term& term, const Vec& q0, const Vec& q1, double t0
 
 void term_gradient(const Term& term, GradientKind kind, const Vec& q0, const Vec& q1, double t0,
                    double t1, Vec& grad, Mat* jac, TermWorkspace& ws) {
+  if (term.fixed_gradient(kind, q0, q1, t0, t1, grad, jac)) return;
+  generic_term_gradient(term, kind, q0, q1, t0, t1, grad, jac, ws);
+}
+
+void generic_term_gradient(const Term& term, GradientKind kind, const Vec& q0, const Vec& q1,
+                           double t0, double t1, Vec& grad, Mat* jac, TermWorkspace& ws) {
   switch (kind) {
     case GradientKind::Exact:
       exact_gradient(term, q1, t1, 1.0, grad, jac, ws);

@@ -41,6 +41,9 @@ struct Symmetry {
 
 enum class PathSmoothness { Smooth, Kink, Unknown };
 
+/// Which gradient of a term a stepper asks for (core/gradient.hpp).
+enum class GradientKind { Exact, Midpoint, Discrete };
+
 class Term {
  public:
   /// @param dofs global dof indices, in the order of the local vector q.
@@ -82,6 +85,15 @@ class Term {
   virtual PathSmoothness smoothness_between(int /*block*/, const VecRef& /*pi0*/,
                                             const VecRef& /*pi1*/) const {
     return PathSmoothness::Unknown;
+  }
+  /// A term's own kernel for term_gradient() (core/gradient.hpp): the same
+  /// gradient of `kind` between q0 and q1 and, with `jac`, its Jacobian
+  /// w.r.t. q1, equal to the generic path's up to round-off, computed with
+  /// fixed sizes and without allocation. Returns false (the default) when
+  /// the term has none; the generic path is then taken.
+  virtual bool fixed_gradient(GradientKind /*kind*/, const Vec& /*q0*/, const Vec& /*q1*/,
+                              double /*t0*/, double /*t1*/, Vec& /*grad*/, Mat* /*jac*/) const {
+    return false;
   }
   /// True when f depends on time explicitly (driven constraints, loads).
   virtual bool depends_on_time() const { return false; }

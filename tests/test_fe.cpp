@@ -578,6 +578,62 @@ TEST(Element, GradientsAndJacobiansMatchFiniteDifferences) {
   }
 }
 
+// The element's fixed-size kernel (Q1Element::fixed_gradient) against the
+// generic path it replaces in term_gradient() (generic_term_gradient: the
+// Term description with dynamic sizes), for every material and gradient kind,
+// gradient and Jacobian, at steps that take each branch of the discrete
+// gradient's correction for Neo-Hooke: large (direct quotient), moderate
+// (quadrature of Hessian differences) and at round-off (none). The two add
+// the same terms in another order: they agree to round-off, 1e-12 relative.
+TEST(Element, FixedSizeKernelEqualsGenericPath) {
+  const QuadNodes x = {Eigen::Vector2d(0.0, 0.0), Eigen::Vector2d(1.3, 0.2),
+                       Eigen::Vector2d(1.1, 1.0), Eigen::Vector2d(-0.2, 0.8)};
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  for (MaterialModel model :
+       {MaterialModel::SaintVenantKirchhoff, MaterialModel::NeoHooke, MaterialModel::Linear}) {
+    const Material mat = paper_material(model);
+    const Q1Element e({0, 1, 2, 3, 4, 5, 6, 7}, x, mat);
+    Vec q0(8);
+    for (int a = 0; a < 4; ++a) q0.segment<2>(2 * a) = x[static_cast<std::size_t>(a)];
+    // Rotated by 0.7 rad and strained ~ 10 %.
+    const double c = std::cos(0.7), sn = std::sin(0.7);
+    for (int a = 0; a < 4; ++a) {
+      const Eigen::Vector2d p = q0.segment<2>(2 * a);
+      q0.segment<2>(2 * a) = Eigen::Vector2d(c * p.x() - sn * p.y(), sn * p.x() + c * p.y());
+    }
+    for (int i = 0; i < 8; ++i) q0[i] += 0.1 * u(rng);
+    TermWorkspace ws;
+    for (double step : {0.2, 2e-3, 1e-10}) {
+      Vec q1 = q0;
+      for (int i = 0; i < 8; ++i) q1[i] += step * u(rng);
+      for (GradientKind kind :
+           {GradientKind::Exact, GradientKind::Midpoint, GradientKind::Discrete}) {
+        Vec g_fixed, g_generic, g_only;
+        Mat k_fixed, k_generic;
+        ASSERT_TRUE(e.fixed_gradient(kind, q0, q1, 0.0, 1.0, g_fixed, &k_fixed));
+        ASSERT_TRUE(e.fixed_gradient(kind, q0, q1, 0.0, 1.0, g_only, nullptr));
+        generic_term_gradient(e, kind, q0, q1, 0.0, 1.0, g_generic, &k_generic, ws);
+        const std::string what = mat.describe() + " kind " +
+                                 std::to_string(static_cast<int>(kind)) + " step " +
+                                 std::to_string(step);
+        ASSERT_EQ(g_fixed.size(), 8) << what;
+        ASSERT_EQ(k_fixed.rows(), 8) << what;
+        ASSERT_EQ(k_fixed.cols(), 8) << what;
+        EXPECT_LE((g_fixed - g_generic).cwiseAbs().maxCoeff(),
+                  1e-12 * g_generic.cwiseAbs().maxCoeff())
+            << what;
+        EXPECT_EQ(g_only, g_fixed) << what;  // the force does not depend on asking for jac
+        EXPECT_LE(max_abs(k_fixed - k_generic), 1e-12 * max_abs(k_generic)) << what;
+        // term_gradient takes the fixed kernel.
+        Vec g_dispatch;
+        term_gradient(e, kind, q0, q1, 0.0, 1.0, g_dispatch, nullptr, ws);
+        EXPECT_EQ(g_dispatch, g_fixed) << what;
+      }
+    }
+  }
+}
+
 // --- mass ----------------------------------------------------------------------
 
 // Consistent mass (paper eq. (13)) of a ring and a rectangle: total mass
