@@ -120,7 +120,7 @@ StepStats MidpointFamilyStepper::solve_substep(State& state, double dt, const Ve
   const std::vector<const Term*> extra = active_terms(state.active);
   const int m = system_.n_constraints() + static_cast<int>(extra.size());
   StepProblem problem(system_, kind_, state, dt, extra, targets, stiffness_diag_,
-                      full_stiffness_diag_);
+                      full_stiffness_diag_, &pattern_);
   Vec x(n + m);
   x.head(n) = guess ? guess->q : Vec(state.q + dt * state.v);
   const Vec& lambda0 = guess && guess->lambda.size() == m ? guess->lambda : state.lambda;

@@ -46,6 +46,7 @@
 
 #include <Eigen/SparseCholesky>
 
+#include "core/assembly.hpp"
 #include "core/gradient.hpp"
 #include "integrators/contact_step.hpp"
 #include "integrators/stepper.hpp"
@@ -76,6 +77,7 @@ class MidpointFamilyStepper : public Stepper, public SubstepScheme {
   ContactStepper contact_;
   Vec stiffness_diag_;       // |K_ii| at the initial configuration, if scaling by it
   Vec full_stiffness_diag_;  // |K_ii| at the initial configuration
+  JacobianPattern pattern_;  // the step Jacobian's, kept while it holds
   Vec external_impulse_, external_angular_impulse_;  // of the last solve
   std::vector<int> free_;                            // free dofs with mass, in order
   std::vector<int> massless_;                        // free dofs without mass
