@@ -791,7 +791,12 @@ TEST(FreeFlight, NeoHookeRingEnergyMomentum) {
   ASSERT_TRUE(em.ok()) << em.status;
   EXPECT_LE(em.energy_rel_error_max, 1e-9);
   EXPECT_LE(relative_linear(*s, em), 1e-11);
-  EXPECT_LE(em.angular_momentum_rel_error_max.value_or(1.0), 1e-11);
+  // The angular momentum error is what 10000 steps' Newton residuals leave
+  // (a random walk, each step converged to 1e-11), not round-off: changing E
+  // by 3e-16 relative moved it between 7.7e-12 and 9.3e-12 (and the Newton
+  // iterations by 5 %), and the fixed-size element kernel's summation order
+  // to 1.0e-11. The bound leaves room for that spread.
+  EXPECT_LE(em.angular_momentum_rel_error_max.value_or(1.0), 2e-11);
   EXPECT_LE(em.newton_iterations_max_per_step, 6);
 }
 
