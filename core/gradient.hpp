@@ -47,6 +47,9 @@ inline constexpr double kDiscreteGradientQuadratureThreshold = 1e-2;
 struct TermWorkspace {
   Vec q_mid, pi0, pi1, pim, g, dpi, g_tilde;
   Mat dpi_mid, dpi_1, block_jac, h;
+  // Per block of the discrete gradient (block_size long).
+  Vec g1, gm, pi_q, dc;
+  Mat hm, h_plus, h_minus;
 };
 
 /// Gradient of `term` of the requested kind between local states q0 (t0) and
