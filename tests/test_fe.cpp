@@ -23,6 +23,7 @@
 #include <string>
 #include <utility>
 
+#include "core/assembly.hpp"
 #include "core/fe_element.hpp"
 #include "core/gradient.hpp"
 #include "core/material.hpp"
@@ -632,6 +633,53 @@ TEST(Element, FixedSizeKernelEqualsGenericPath) {
       }
     }
   }
+}
+
+// The step Jacobian through JacobianPattern's slots (StepProblem) against
+// the triplet path it replaced (element Jacobians as triplets, then
+// setFromTriplets): the same matrix, pattern and values, for a body with a
+// fixed node (no Jacobian rows there). A triplet list with another (row,
+// col) sequence rebuilds the slots, the same sequence keeps them.
+TEST(Assembly, SlotMapJacobianEqualsTriplets) {
+  System s(2);
+  add_body(s, rectangle_mesh(Eigen::Vector2d::Zero(), 2.0, 1.0, 3, 2),
+           paper_material(MaterialModel::NeoHooke));
+  s.fix_node(0);
+  const int n = s.n_dofs();
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  Vec q0 = s.initial_positions(), q1 = q0;
+  for (int i = 0; i < n; ++i) {
+    q0[i] += 0.05 * u(rng);
+    q1[i] += 0.05 * u(rng);
+  }
+  Assembler assembler(s);
+  JacobianPattern pattern;
+  SparseMatrix j;
+  for (GradientKind kind : {GradientKind::Exact, GradientKind::Midpoint, GradientKind::Discrete})
+    for (bool extra : {false, true, true}) {
+      Triplets t;
+      assembler.add_mass(t, 3.0);
+      if (extra) t.emplace_back(n - 1, 1, 0.25);  // an entry outside the elements' pattern
+      Triplets all = t;
+      Vec f = Vec::Zero(n);
+      assembler.add_potential_forces(kind, q0, q1, 0.0, 1.0, f, &all, 0.5);
+      SparseMatrix reference(n, n);
+      reference.setFromTriplets(all.begin(), all.end());
+
+      pattern.prepare(t, s, n, j);
+      pattern.scatter(t, j);
+      assembler.add_potential_jacobian(kind, q0, q1, 0.0, 1.0, j.valuePtr(),
+                                       pattern.potential_slots(), 0.5);
+      ASSERT_EQ(j.nonZeros(), reference.nonZeros());
+      const Mat d = Mat(j) - Mat(reference);
+      EXPECT_LE(d.cwiseAbs().maxCoeff(), 1e-13 * Mat(reference).cwiseAbs().maxCoeff())
+          << static_cast<int>(kind) << " " << extra;
+      EXPECT_EQ(Mat(j).topRows(2).cwiseAbs().maxCoeff(), 0.0);  // the fixed node's rows
+      EXPECT_GT(Mat(j).bottomRows(n - 2).cwiseAbs().maxCoeff(), 0.0);
+    }
+  // Three kinds x (plain, extra, extra): the sequence changes 6 times.
+  EXPECT_EQ(pattern.rebuilds(), 6);
 }
 
 // --- mass ----------------------------------------------------------------------
