@@ -109,6 +109,7 @@ int run_scene(const RunOptions& options, std::ostream& out, std::ostream& err, R
           ? "out/" + settings.name + "-" + (settings.static_only ? "static" : settings.scheme)
           : options.out_dir;
   settings.force = options.force;
+  settings.statics.settings.verbose = options.verbose;
   settings.checkpoint_every = options.checkpoint_every;
   settings.resume = !options.resume_dir.empty();
   if (options.checkpoint_every > 0) settings.resume_note = resume_note(options);
@@ -180,6 +181,7 @@ int resume(const RunOptions& given, std::ostream& out, std::ostream& err, RunRec
                                       note.string(), e.what()));
   }
   o.quiet = given.quiet;
+  o.verbose = given.verbose;
   o.progress_label = given.progress_label;
   o.resume_dir = given.resume_dir;
   return run_scene(o, out, err, record);

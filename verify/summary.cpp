@@ -87,6 +87,11 @@ Summary summarize(const RunInfo& info, const System& system, const Recorder& rec
   s.external_work = recorder.last().external_work - recorder.initial().external_work;
   s.linear_momentum_error_max = recorder.linear_momentum_error_max();
   s.linear_momentum_note = recorder.conservation().linear_reason;
+  if (!s.linear_momentum_error_max)
+    for (int d = 0; d < system.dim(); ++d)
+      s.linear_momentum_axes.push_back({std::string(1, "xyz"[d]),
+                                        recorder.linear_momentum_axis_error_max(d),
+                                        recorder.conservation().linear_axis_reasons[d]});
   s.angular_momentum_rel_error_max = recorder.angular_momentum_rel_error_max();
   s.angular_momentum_note = recorder.conservation().angular_reason;
   s.angular_momentum_error_relative = recorder.angular_momentum_error_is_relative();
@@ -135,6 +140,12 @@ Summary summarize(const RunInfo& info, const System& system, const Recorder& rec
   if (tolerances.linear_momentum)
     s.checks.push_back(make_check("linear_momentum", dynamic(s.linear_momentum_error_max),
                                   *tolerances.linear_momentum, why));
+  // The whole vector is not conserved: each conserved component is checked.
+  if (tolerances.linear_momentum && !s.static_analysis)
+    for (const AxisMomentum& a : s.linear_momentum_axes)
+      if (a.error_max)
+        s.checks.push_back(
+            make_check("linear_momentum_" + a.axis, a.error_max, *tolerances.linear_momentum, why));
   if (tolerances.angular_momentum_rel)
     s.checks.push_back(make_check("angular_momentum_rel", dynamic(s.angular_momentum_rel_error_max),
                                   *tolerances.angular_momentum_rel, why));
@@ -276,6 +287,10 @@ nlohmann::ordered_json to_json(const Summary& s) {
   }
   j["linear_momentum_error_max"] = optional_number(s.linear_momentum_error_max);
   if (!s.linear_momentum_note.empty()) j["linear_momentum_note"] = s.linear_momentum_note;
+  for (const AxisMomentum& a : s.linear_momentum_axes) {
+    j["linear_momentum_" + a.axis + "_error_max"] = optional_number(a.error_max);
+    if (!a.note.empty()) j["linear_momentum_" + a.axis + "_note"] = a.note;
+  }
   j["angular_momentum_rel_error_max"] = optional_number(s.angular_momentum_rel_error_max);
   if (!s.angular_momentum_note.empty()) j["angular_momentum_note"] = s.angular_momentum_note;
   j["linear_momentum_balance_error_max"] = optional_number(s.linear_momentum_balance_error_max);
@@ -337,6 +352,8 @@ void print_summary(std::ostream& out, const Summary& s, const std::string& dir, 
       row("energy balance error", fmt::format("{:.3e} (external work {:.6g})",
                                               *s.energy_balance_rel_error_max, s.external_work));
     row("lin. momentum error", maybe(s.linear_momentum_error_max, s.linear_momentum_note));
+    for (const AxisMomentum& a : s.linear_momentum_axes)
+      row("  component " + a.axis, maybe(a.error_max, a.note));
     if (!s.linear_momentum_error_max && s.linear_momentum_balance_error_max)
       row("lin. momentum balance", fmt::format("{:.3e}", *s.linear_momentum_balance_error_max));
     row("ang. momentum error", maybe(s.angular_momentum_rel_error_max, s.angular_momentum_note));
