@@ -78,8 +78,9 @@ Conservation conservation_of(const System& system) {
   c.angular = angular_causes.empty();
   if (!c.linear) c.linear_reason = reason(linear_causes);
   if (!c.angular) c.angular_reason = reason(angular_causes);
-  // Per axis: fixed dofs along it, loads with a resultant along it, and any
-  // term without translation symmetry (it may push along every axis).
+  // Per axis: fixed dofs along it, loads with a resultant along it, and
+  // terms not invariant under a translation along it (a weight along y
+  // leaves x free; Term::translation_axes).
   const int dim = system.dim();
   std::vector<std::vector<std::string>> axis_causes(dim);
   for (const PrescribedDof& p : system.prescribed())
@@ -89,8 +90,13 @@ Conservation conservation_of(const System& system) {
     for (int d = 0; d < dim; ++d)
       if (axes[d]) add_unique(axis_causes[d], "external loads with a resultant along this axis");
   }
-  for (int d = 0; d < dim; ++d)
-    axis_causes[d].insert(axis_causes[d].end(), linear_terms.begin(), linear_terms.end());
+  for (const auto* list : {&system.potentials(), &system.constraints()})
+    for (const auto& term : *list) {
+      const std::vector<bool> axes = term->translation_axes(dim);
+      for (int d = 0; d < dim; ++d)
+        if (!axes[static_cast<std::size_t>(d)])
+          add_unique(axis_causes[d], term_kind(*term) + " terms");
+    }
   for (int d = 0; d < dim; ++d) {
     c.linear_axes.push_back(axis_causes[d].empty());
     c.linear_axis_reasons.push_back(axis_causes[d].empty() ? "" : reason(axis_causes[d]));

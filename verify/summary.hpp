@@ -102,7 +102,9 @@ struct Summary {
   double external_work = 0.0;                          // W over the run
   std::optional<double> linear_momentum_error_max;
   std::string linear_momentum_note;
-  std::vector<AxisMomentum> linear_momentum_axes;  // empty when linear momentum is conserved
+  // Per component, when the whole is not conserved but some component is
+  // (empty otherwise, and in a static analysis).
+  std::vector<AxisMomentum> linear_momentum_axes;
   std::optional<double> angular_momentum_rel_error_max;
   bool angular_momentum_error_relative = true;  // false: |J_0| ~ 0, the error is absolute
   std::string angular_momentum_note;
