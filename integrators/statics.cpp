@@ -105,8 +105,6 @@ class PseudoTransientStepper final : public MidpointFamilyStepper {
   std::string name() const override { return "pseudo-transient"; }
 };
 
-}  // namespace
-
 // The largest change a pseudo step may make: a tenth of the diagonal of the
 // configuration's bounding box (a body pushed by a force while it touches
 // nothing has no stiffness against the push, and a step of the full pseudo_dt
@@ -122,6 +120,8 @@ double step_change_limit(const System& system, const Vec& q) {
   const double diagonal = system.n_nodes() > 0 ? (hi - lo).norm() : 0.0;
   return diagonal > 0 ? 0.1 * diagonal : std::numeric_limits<double>::infinity();
 }
+
+}  // namespace
 
 StaticResult solve_static_held(const System& system, State& state, const StaticSettings& settings) {
   MidpointFamilySettings scheme;
@@ -203,8 +203,10 @@ StaticResult solve_static_held(const System& system, State& state, const StaticS
   out.steps = settings.max_steps;
   std::ostringstream msg;
   msg << "static solve: not converged after " << settings.max_steps << " pseudo steps (last change "
-      << out.change << ", pseudo dt " << h << " of statics.pseudo_dt = " << h_max << ", "
-      << cutbacks << " cut-backs)";
+      << out.change << " > statics.tolerance = " << settings.tolerance << ", pseudo dt " << h
+      << " of statics.pseudo_dt = " << h_max << ", " << cutbacks
+      << " cut-backs); try more statics.max_steps, another statics.pseudo_dt or more "
+         "statics.increments";
   out.message = msg.str();
   return out;
 }

@@ -313,6 +313,22 @@ TEST(Cli, CheckShowsWhatWouldBeBuiltAndWritesNothing) {
   EXPECT_TRUE(fs::is_empty(dir.path()));
 }
 
+// --verbose (formerly the environment variable EMDAE_STATICS_PRINT): every
+// pseudo step of the static solve on stderr; nothing of it without the flag.
+TEST(Cli, VerbosePrintsThePseudoStepsOfTheStaticSolve) {
+  TempDir dir;
+  const Result quiet = emdae("run " + quote(example("patch_test")) + " -q --out a", dir.path());
+  ASSERT_EQ(quiet.code, 0) << quiet.output;
+  EXPECT_EQ(quiet.output.find("statics: step"), std::string::npos) << quiet.output;
+  const Result r =
+      emdae("run " + quote(example("patch_test")) + " -q --verbose --out b", dir.path());
+  ASSERT_EQ(r.code, 0) << r.output;
+  for (const char* s : {"statics: step 1 accepted, pseudo dt", "Newton iterations (residual"})
+    EXPECT_NE(r.output.find(s), std::string::npos) << s << " in\n" << r.output;
+  const Result help = emdae("help run");
+  EXPECT_NE(help.output.find("--verbose"), std::string::npos) << help.output;
+}
+
 // --- the writers of verify/ ---------------------------------------------------------
 
 TEST(Verify, HistoryColumns) {
