@@ -132,7 +132,8 @@ int run_scene(const RunOptions& options, std::ostream& out, std::ostream& err, R
   const Summary& summary = result.summary;
   int code = exit_code(result);
   if (!options.quiet || code != kExitOk)
-    print_summary(out, summary, settings.out_dir, result.fields, result.contact_table);
+    print_summary(out, summary, settings.out_dir, result.fields, result.contact_table,
+                  result.trajectories);
   if (code == kExitChecksFailed)
     for (const auto& c : summary.checks)
       if (c.result == "fail")

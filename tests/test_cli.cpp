@@ -201,6 +201,12 @@ TEST(Cli, RunWritesSummaryAndHistory) {
   EXPECT_EQ(s["checks_pass"], true);
   EXPECT_FALSE(fs::exists(dir / "o/summary.json.tmp"));
 
+  // The particles' trajectories (3D), listed with the outputs.
+  EXPECT_NE(r.output.find("trajectories.csv,trajectories.pvd}"), std::string::npos) << r.output;
+  const auto traj = read_lines(dir / "o/trajectories.csv");
+  ASSERT_EQ(traj.size(), 1u + 4u * 501u);  // header, 4 particles at 501 times
+  EXPECT_EQ(traj[0], "t,point,x,y,z,vx,vy,vz");
+
   const auto lines = read_lines(dir / "o/history.csv");
   ASSERT_EQ(lines.size(), 1u + 1u + 500u);  // header, initial state, every step
   EXPECT_EQ(lines[0], kHeader3D);

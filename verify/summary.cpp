@@ -332,7 +332,7 @@ void write_summary(const std::string& path, const Summary& summary) {
 }
 
 void print_summary(std::ostream& out, const Summary& s, const std::string& dir, bool fields,
-                   bool contact_table) {
+                   bool contact_table, bool trajectories) {
   const auto row = [&out](const std::string& label, const std::string& value) {
     // At least one space: "check angular_momentum_balance_rel" is longer than the column.
     fmt::print(out, "  {:<27} {}\n", label, value);
@@ -391,7 +391,8 @@ void print_summary(std::ostream& out, const Summary& s, const std::string& dir, 
     row("check " + c.name, verdict);
   }
   row("output", dir + "/{history.csv,summary.json,report.html" +
-                    (contact_table ? ",contact.csv" : "") + (fields ? ",fields.pvd" : "") + "}");
+                    (contact_table ? ",contact.csv" : "") + (fields ? ",fields.pvd" : "") +
+                    (trajectories ? ",trajectories.csv,trajectories.pvd" : "") + "}");
 }
 
 }  // namespace emdae

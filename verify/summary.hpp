@@ -148,7 +148,7 @@ nlohmann::ordered_json to_json(const Summary& summary);
 /// The summary as the table `emdae run` prints: one "label  value" row per
 /// figure, the checks, and the files written to `dir`.
 void print_summary(std::ostream& out, const Summary& summary, const std::string& dir,
-                   bool fields = false, bool contact_table = false);
+                   bool fields = false, bool contact_table = false, bool trajectories = false);
 
 /// Writes `summary` to `path` atomically; throws std::runtime_error on failure.
 void write_summary(const std::string& path, const Summary& summary);
