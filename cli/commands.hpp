@@ -38,6 +38,7 @@ struct RunOptions {
   std::string out_dir;                 // empty: out/<scene name>-<scheme>
   std::vector<std::string> overrides;  // "key=value"
   bool quiet = false;
+  bool verbose = false;        // --verbose: every pseudo step of [statics] on stderr
   bool force = false;          // reuse an output folder holding files emdae did not write
   long checkpoint_every = 0;   // --checkpoint-every N: a checkpoint every N steps
   std::string resume_dir;      // --resume DIR: go on from DIR's checkpoint

@@ -117,6 +117,9 @@ int emdae_main(int argc, char** argv) {
              "Override a scene value, e.g. --set time.dt=0.005 or "
              "--set 'particles[0].mass=2' (repeatable)");
   run->add_flag("-q,--quiet", run_options.quiet, "No progress lines and no summary table");
+  run->add_flag("-v,--verbose", run_options.verbose,
+                "Print every pseudo step of the [statics] solve to stderr (pseudo dt, change, "
+                "active contacts, Newton iterations and residual, cut-backs)");
   run->add_option("--checkpoint-every", run_options.checkpoint_every,
                   "Write the whole state of the run to DIR/checkpoint/ every N steps "
                   "(atomically), to go on with --resume after a crash or a kill")

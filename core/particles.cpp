@@ -111,6 +111,12 @@ class DeadLoad final : public QuadraticFormTerm {
   void block_hessian(int, const VecRef&, double, Eigen::Ref<Mat> h) const override { h.setZero(); }
   bool quadratic_in_invariants() const override { return true; }
   Symmetry symmetry() const override { return {false, false}; }
+  // V = -f . q_a changes under a translation along d only when f_d != 0.
+  std::vector<bool> translation_axes(int dim) const override {
+    std::vector<bool> out(static_cast<std::size_t>(dim), true);
+    for (int d = 0; d < dim && d < force_.size(); ++d) out[d] = force_[d] == 0.0;
+    return out;
+  }
   std::string describe() const override { return "dead load"; }
 
  private:

@@ -98,6 +98,13 @@ class Term {
   /// True when f depends on time explicitly (driven constraints, loads).
   virtual bool depends_on_time() const { return false; }
   virtual Symmetry symmetry() const { return {}; }
+  /// Per axis (dim of them): whether a translation along that axis alone
+  /// leaves the term unchanged, so that it cannot change that component of
+  /// the linear momentum (a weight along y leaves x free). Default: every
+  /// axis as symmetry().translation says.
+  virtual std::vector<bool> translation_axes(int dim) const {
+    return std::vector<bool>(static_cast<std::size_t>(dim), symmetry().translation);
+  }
   /// What the term is, for messages and `emdae check`.
   virtual std::string describe() const = 0;
 

@@ -665,7 +665,8 @@ void bind_settings(py::module_& m) {
   py::class_<OutputSettings>(m, "OutputSettings")
       .def(py::init<>())
       .def_readwrite("every", &OutputSettings::every)
-      .def_readwrite("vtu_every", &OutputSettings::vtu_every);
+      .def_readwrite("vtu_every", &OutputSettings::vtu_every)
+      .def_readwrite("track", &OutputSettings::track);
   py::class_<Tolerances>(m, "Tolerances")
       .def(py::init<>())
       .def_readwrite("energy_rel", &Tolerances::energy_rel)

@@ -78,6 +78,29 @@ Conservation conservation_of(const System& system) {
   c.angular = angular_causes.empty();
   if (!c.linear) c.linear_reason = reason(linear_causes);
   if (!c.angular) c.angular_reason = reason(angular_causes);
+  // Per axis: fixed dofs along it, loads with a resultant along it, and
+  // terms not invariant under a translation along it (a weight along y
+  // leaves x free; Term::translation_axes).
+  const int dim = system.dim();
+  std::vector<std::vector<std::string>> axis_causes(dim);
+  for (const PrescribedDof& p : system.prescribed())
+    add_unique(axis_causes[p.dof % dim], "fixed dofs along this axis");
+  for (const auto& load : system.loads()) {
+    const std::vector<bool> axes = load->resultant_axes(dim);
+    for (int d = 0; d < dim; ++d)
+      if (axes[d]) add_unique(axis_causes[d], "external loads with a resultant along this axis");
+  }
+  for (const auto* list : {&system.potentials(), &system.constraints()})
+    for (const auto& term : *list) {
+      const std::vector<bool> axes = term->translation_axes(dim);
+      for (int d = 0; d < dim; ++d)
+        if (!axes[static_cast<std::size_t>(d)])
+          add_unique(axis_causes[d], term_kind(*term) + " terms");
+    }
+  for (int d = 0; d < dim; ++d) {
+    c.linear_axes.push_back(axis_causes[d].empty());
+    c.linear_axis_reasons.push_back(axis_causes[d].empty() ? "" : reason(axis_causes[d]));
+  }
   return c;
 }
 
@@ -98,6 +121,7 @@ Recorder::Recorder(const System& system, const State& initial, ExternalWork exte
   const double j_size = angular_momentum_scale(system, initial.q, initial.v);
   angular_scale_ = (j0 > 1e-12 * j_size) ? j0 : 0.0;
   impulse_ = Vec::Zero(q0.linear_momentum.size());
+  linear_axis_error_max_ = Vec::Zero(q0.linear_momentum.size());
   angular_impulse_ = Vec::Zero(q0.angular_momentum.size());
   update_maxima(initial_);
   last_ = initial_;
@@ -212,6 +236,8 @@ void Recorder::update_maxima(Sample& s) {
   keep_max(balance_error_max_, s.energy_error);
   if (!has_loads_) energy_error_max_ = balance_error_max_;
   keep_max(linear_error_max_, s.linear_momentum_error);
+  for (Eigen::Index d = 0; d < linear_axis_error_max_.size(); ++d)
+    keep_max(linear_axis_error_max_[d], std::abs(q.linear_momentum[d] - q0.linear_momentum[d]));
   keep_max(angular_error_max_, s.angular_momentum_error);
   keep_max(constraint_max_, q.phi_max);
   if (s.step == 0) angular_size_max_ = q.angular_momentum.norm();
@@ -243,6 +269,12 @@ std::optional<double> Recorder::energy_balance_rel_error_max() const {
 std::optional<double> Recorder::linear_momentum_error_max() const {
   if (!conservation_.linear) return std::nullopt;
   return linear_error_max_;
+}
+
+std::optional<double> Recorder::linear_momentum_axis_error_max(int d) const {
+  if (d < 0 || d >= linear_axis_error_max_.size() || !conservation_.linear_axes[d])
+    return std::nullopt;
+  return linear_axis_error_max_[d];
 }
 
 std::optional<double> Recorder::angular_momentum_rel_error_max() const {
@@ -341,6 +373,7 @@ void Recorder::save(std::ostream& out) const {
   put(out, free_intervals_);
   put_vec(out, impulse_);
   put_vec(out, angular_impulse_);
+  put_vec(out, linear_axis_error_max_);
   put(out, impulses_known_);
   put(out, active_max_);
   put(out, contact_events_);
@@ -367,6 +400,7 @@ void Recorder::restore(std::istream& in) {
   free_intervals_ = get<int>(in);
   impulse_ = get_vec(in);
   angular_impulse_ = get_vec(in);
+  linear_axis_error_max_ = get_vec(in);
   impulses_known_ = get<bool>(in);
   active_max_ = get<int>(in);
   contact_events_ = get<long>(in);

@@ -86,6 +86,12 @@ struct Conservation {
   bool linear_balance = true;
   bool angular_balance = true;
   std::string linear_balance_reason, angular_balance_reason;
+  // Each component of the linear momentum on its own (x, y[, z]): a load or
+  // support along y only (gravity, a roller) leaves p_x conserved. Detected
+  // from the loads' resultants (Load::resultant_axes), the prescribed dofs'
+  // axes and the terms' symmetry.
+  std::vector<bool> linear_axes;
+  std::vector<std::string> linear_axis_reasons;  // "not conserved: ..." per broken axis
 };
 
 Conservation conservation_of(const System& system);
@@ -147,6 +153,9 @@ class Recorder {
   /// Empty when the system does not conserve the quantity.
   std::optional<double> linear_momentum_error_max() const;
   std::optional<double> angular_momentum_rel_error_max() const;
+  /// max_n |L_n,d - L_0,d|, the error of component d alone; empty when that
+  /// component is not conserved (conservation().linear_axis_reasons[d]).
+  std::optional<double> linear_momentum_axis_error_max(int d) const;
   /// False when |J_0| is at round-off level and the error is absolute.
   bool angular_momentum_error_is_relative() const { return angular_scale_ > 0.0; }
 
@@ -198,6 +207,7 @@ class Recorder {
   double contact_last_ = std::numeric_limits<double>::quiet_NaN();
   double linear_error_max_ = 0.0;
   double angular_error_max_ = 0.0;
+  Vec linear_axis_error_max_;  // per component
   double constraint_max_ = 0.0;
   long newton_iterations_ = 0;
   int newton_max_per_step_ = 0;

@@ -4,6 +4,7 @@
 #include <fmt/ostream.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cmath>
 #include <cstdio>
@@ -89,6 +90,17 @@ Summary summarize(const RunInfo& info, const System& system, const Recorder& rec
   s.external_work = recorder.last().external_work - recorder.initial().external_work;
   s.linear_momentum_error_max = recorder.linear_momentum_error_max();
   s.linear_momentum_note = recorder.conservation().linear_reason;
+  // Not conserved as a whole, but maybe some component is (nothing pushes
+  // along that axis): then every component is reported on its own.
+  if (!s.linear_momentum_error_max && !info.static_analysis) {
+    std::vector<AxisMomentum> axes;
+    for (int d = 0; d < system.dim(); ++d)
+      axes.push_back({std::string(1, "xyz"[d]), recorder.linear_momentum_axis_error_max(d),
+                      recorder.conservation().linear_axis_reasons[d]});
+    if (std::any_of(axes.begin(), axes.end(),
+                    [](const AxisMomentum& a) { return a.error_max.has_value(); }))
+      s.linear_momentum_axes = std::move(axes);
+  }
   s.angular_momentum_rel_error_max = recorder.angular_momentum_rel_error_max();
   s.angular_momentum_note = recorder.conservation().angular_reason;
   s.angular_momentum_error_relative = recorder.angular_momentum_error_is_relative();
@@ -137,6 +149,13 @@ Summary summarize(const RunInfo& info, const System& system, const Recorder& rec
   if (tolerances.linear_momentum)
     s.checks.push_back(make_check("linear_momentum", dynamic(s.linear_momentum_error_max),
                                   *tolerances.linear_momentum, why));
+  // The whole vector is not conserved but some component is (a weight or a
+  // roller along y leaves x free): each component gets a check, the
+  // conserved ones judged, the others skipped saying why.
+  if (tolerances.linear_momentum)
+    for (const AxisMomentum& a : s.linear_momentum_axes)
+      s.checks.push_back(make_check("linear_momentum_" + a.axis, a.error_max,
+                                    *tolerances.linear_momentum, a.note));
   if (tolerances.angular_momentum_rel)
     s.checks.push_back(make_check("angular_momentum_rel", dynamic(s.angular_momentum_rel_error_max),
                                   *tolerances.angular_momentum_rel, why));
@@ -279,6 +298,10 @@ nlohmann::ordered_json to_json(const Summary& s) {
   }
   j["linear_momentum_error_max"] = optional_number(s.linear_momentum_error_max);
   if (!s.linear_momentum_note.empty()) j["linear_momentum_note"] = s.linear_momentum_note;
+  for (const AxisMomentum& a : s.linear_momentum_axes) {
+    j["linear_momentum_" + a.axis + "_error_max"] = optional_number(a.error_max);
+    if (!a.note.empty()) j["linear_momentum_" + a.axis + "_note"] = a.note;
+  }
   j["angular_momentum_rel_error_max"] = optional_number(s.angular_momentum_rel_error_max);
   if (!s.angular_momentum_note.empty()) j["angular_momentum_note"] = s.angular_momentum_note;
   j["linear_momentum_balance_error_max"] = optional_number(s.linear_momentum_balance_error_max);
@@ -309,7 +332,7 @@ void write_summary(const std::string& path, const Summary& summary) {
 }
 
 void print_summary(std::ostream& out, const Summary& s, const std::string& dir, bool fields,
-                   bool contact_table) {
+                   bool contact_table, bool trajectories) {
   const auto row = [&out](const std::string& label, const std::string& value) {
     // At least one space: "check angular_momentum_balance_rel" is longer than the column.
     fmt::print(out, "  {:<27} {}\n", label, value);
@@ -340,6 +363,8 @@ void print_summary(std::ostream& out, const Summary& s, const std::string& dir, 
       row("energy balance error", fmt::format("{:.3e} (external work {:.6g})",
                                               *s.energy_balance_rel_error_max, s.external_work));
     row("lin. momentum error", maybe(s.linear_momentum_error_max, s.linear_momentum_note));
+    for (const AxisMomentum& a : s.linear_momentum_axes)
+      row("  component " + a.axis, maybe(a.error_max, a.note));
     if (!s.linear_momentum_error_max && s.linear_momentum_balance_error_max)
       row("lin. momentum balance", fmt::format("{:.3e}", *s.linear_momentum_balance_error_max));
     row("ang. momentum error", maybe(s.angular_momentum_rel_error_max, s.angular_momentum_note));
@@ -366,7 +391,8 @@ void print_summary(std::ostream& out, const Summary& s, const std::string& dir, 
     row("check " + c.name, verdict);
   }
   row("output", dir + "/{history.csv,summary.json,report.html" +
-                    (contact_table ? ",contact.csv" : "") + (fields ? ",fields.pvd" : "") + "}");
+                    (contact_table ? ",contact.csv" : "") + (fields ? ",fields.pvd" : "") +
+                    (trajectories ? ",trajectories.csv,trajectories.pvd" : "") + "}");
 }
 
 }  // namespace emdae
