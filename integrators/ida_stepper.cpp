@@ -1,5 +1,5 @@
-// The IDA stepper (ida_stepper.hpp): the time derivatives the Term interface
-// lacks, the consistent start, and the driver: IDA's allocation and
+// The IDA stepper (ida_stepper.hpp): the time derivatives of driven
+// constraints, the consistent start, and the driver: IDA's allocation and
 // (re)starts with the active set settled, the loads' quadratures, contact
 // events and step(). The GGL system that IDA calls back (residual, Jacobian,
 // root functions) is in ida_residual.cpp; the state both share,
@@ -56,8 +56,7 @@ double time_step_second(double t) {
 }
 
 double phi_tt(const Term& c, const Vec& ql, double t) {
-  const double h = time_step_second(t);
-  return (c.value(ql, t + h) - 2 * c.value(ql, t) + c.value(ql, t - h)) / (h * h);
+  return c.value_tt(ql, t);
 }
 
 double prescribed_acceleration(const PrescribedDof& p, double t) {
@@ -72,9 +71,10 @@ bool same(const Vec& a, const Vec& b) {
 
 }  // namespace
 
-// --- time derivatives the Term interface does not provide ------------------
-// Central differences in t with step 1e-5 max(1, |t|): truncation ~1e-10,
-// round-off ~1e-11 relative.
+// --- time derivatives of driven constraints ---------------------------------
+// From the term when it supplies them (Term::has_time_derivatives()); else
+// central differences in t with step 1e-5 max(1, |t|): truncation ~1e-10,
+// round-off ~1e-11 relative, which is what limits IDA's tolerances then.
 
 namespace {
 double time_step_first(double t) {
@@ -83,12 +83,15 @@ double time_step_first(double t) {
 }  // namespace
 
 double constraint_rate(const Term& c, const Vec& q_local, double t) {
-  const double h = time_step_first(t);
-  return (c.value(q_local, t + h) - c.value(q_local, t - h)) / (2 * h);
+  return c.value_t(q_local, t);
 }
 
 void constraint_gradient_rate(const Term& c, const Vec& q_local, double t, Vec& out,
                               TermWorkspace& ws) {
+  if (c.has_time_derivatives()) {
+    c.gradient_t(q_local, t, out);
+    return;
+  }
   const double h = time_step_first(t);
   Vec gp, gm;
   term_gradient(c, GradientKind::Exact, q_local, q_local, t + h, t + h, gp, nullptr, ws);
