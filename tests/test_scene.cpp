@@ -197,6 +197,22 @@ std::vector<Malformed> malformed_scenes() {
            "[[anchors]]\nparticle = \"a\"\npoint = [0.0, 1.0]\n",
        "particle = \"a\"",
        {"key 'anchors[0].particle'", "fixed", "received \"a\""}},
+      {"anchor_path_periodic_open",
+       kValid + "[[anchors]]\nparticle = \"a\"\npoint = [0.0, 1.0]\n" +
+           "path = { times = [0.0, 1.0, 2.0], x = [0.0, 0.1, 0.2], interpolation = \"periodic\" "
+           "}\n",
+       "path = {",
+       {"key 'anchors[0].path.x'", "equal first and last values", "received [0.0, 0.1, 0.2]"}},
+      {"anchor_path_interpolation_unknown",
+       kValid + "[[anchors]]\nparticle = \"a\"\npoint = [0.0, 1.0]\n" +
+           "path = { times = [0.0, 1.0, 2.0], y = [0.0, 0.1, 0.2], interpolation = \"spline\" }\n",
+       "path = {",
+       {"key 'anchors[0].path.interpolation'", "unknown interpolation", "received \"spline\""}},
+      {"anchor_path_short_values",
+       kValid + "[[anchors]]\nparticle = \"a\"\npoint = [0.0, 1.0]\n" +
+           "path = { times = [0.0, 1.0, 2.0], x = [0.0, 0.1] }\n",
+       "path = {",
+       {"key 'anchors[0].path.x'", "as many entries as times (3)"}},
       {"all_fixed",
        kTime + "[[particles]]\nname = \"a\"\nposition = [0.0, 0.0]\nfixed = true\n",
        "[[particles]]",
