@@ -178,4 +178,29 @@ double MortarGapTerm::coverage(const Vec& q) const {
   return c;
 }
 
+MortarGapTerm::CurrentWeight MortarGapTerm::current_weight(const Vec& q) const {
+  Vec pi;
+  invariants(q, pi);
+  CurrentWeight w;
+  for (std::size_t b = 0; b < pairs_.size(); ++b) {
+    const double p1 = pi[static_cast<Eigen::Index>(5 * b)],
+                 p2 = pi[static_cast<Eigen::Index>(5 * b) + 1],
+                 p3 = pi[static_cast<Eigen::Index>(5 * b) + 2];
+    if (!(p3 < p2) || !(p1 > 0)) continue;
+    const double sa = std::max(0.0, p3), sb = std::min(p1, p2);
+    if (!(sb > sa)) continue;
+    // s = a.(x - x1s) runs over [0, |a|^2]: the arc length is s / |a|, and
+    // int N_2 ds = (sb^2 - sa^2) / (2 pi1), N_1 = 1 - N_2.
+    const double n2 = (sb * sb - sa * sa) / (2.0 * p1);
+    const double length = (pairs_[b].slave_node == 0 ? (sb - sa) - n2 : n2) / std::sqrt(p1);
+    // a = x2s - x1s; the outward normal is a turned clockwise, (a_y, -a_x) / |a|.
+    const auto& n = pairs_[b].local_nodes;
+    const double ax = q[dof(n[1], 0)] - q[dof(n[0], 0)], ay = q[dof(n[1], 1)] - q[dof(n[0], 1)];
+    w.length += length;
+    w.normal[0] += length * ay / std::sqrt(p1);
+    w.normal[1] -= length * ax / std::sqrt(p1);
+  }
+  return w;
+}
+
 }  // namespace emdae

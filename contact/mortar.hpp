@@ -85,6 +85,15 @@ class MortarGapTerm final : public Term {
   /// Fraction of the node's segments covered by mortar segments at q (local):
   /// 0 when no master segment overlaps any more.
   double coverage(const Vec& q) const;
+  /// The node's mortar weight at q (local): w_A = int N_A dgamma over its
+  /// mortar segments in the current configuration, the length over which its
+  /// multiplier acts (weight() is the reference one, over whole segments),
+  /// and int N_A n dgamma, n the slave segments' outward unit normals.
+  struct CurrentWeight {
+    double length = 0.0;
+    double normal[2] = {0.0, 0.0};
+  };
+  CurrentWeight current_weight(const Vec& q) const;
   double weight() const { return weight_; }
 
  private:

@@ -83,6 +83,14 @@ double MortarContact::gap(int i, const Vec& q) const {
   return t->value(local, 0.0);
 }
 
+MortarGapTerm::CurrentWeight MortarContact::current_weight(int i, const Vec& q) const {
+  const MortarGapTerm* t = terms_[static_cast<std::size_t>(i)].get();
+  if (!t) return {};
+  Vec local;
+  gather(*t, q, local);
+  return t->current_weight(local);
+}
+
 void MortarContact::prepare(const Vec& q, const Vec& v, double dt) {
   // How far the surfaces can close within the step, plus a margin.
   double vmax = 0.0;
@@ -165,9 +173,11 @@ std::vector<SlavePressure> slave_pressures(const System& system, const Vec& q, c
     p.candidate = i;
     p.node = contact->slave_node(i);
     p.gap = contact->gap(i, q);
-    p.weight = contact->weight(i);
-    p.force = -lambda[n_static + static_cast<Eigen::Index>(k)];
-    p.pressure = p.force / p.weight;
+    p.pressure = -lambda[n_static + static_cast<Eigen::Index>(k)] / contact->weight(i);
+    const MortarGapTerm::CurrentWeight w = contact->current_weight(i, q);
+    p.weight = w.length;
+    p.force = p.pressure * p.weight;
+    for (int d = 0; d < 2; ++d) p.resultant[d] = -p.pressure * w.normal[d];
     out.push_back(p);
   }
   std::sort(out.begin(), out.end(), [](const SlavePressure& a, const SlavePressure& b) {

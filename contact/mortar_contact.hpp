@@ -57,6 +57,11 @@ class MortarContact final : public UnilateralConstraints {
   int slave_node(int i) const { return slave_nodes_[static_cast<std::size_t>(i)]; }
   /// Mortar weight int N_A dGamma of slave node i in the reference configuration.
   double weight(int i) const { return weights_[static_cast<std::size_t>(i)]; }
+  /// Its mortar weight at q: int N_A dgamma over the node's mortar segments
+  /// (the part of its slave segments opposite the master) in the current
+  /// configuration, with the segments as of the last prepare(), and int N_A n
+  /// dgamma (n the outward unit normal); zero when nothing lies opposite.
+  MortarGapTerm::CurrentWeight current_weight(int i, const Vec& q) const;
   /// Segment pairs found by the last prepare(), and box tests it made.
   long n_pairs() const { return n_pairs_; }
   long n_box_tests() const { return grid_.tests(); }
@@ -76,18 +81,27 @@ class MortarContact final : public UnilateralConstraints {
 
 /// The contact pressure at one active slave node A of a MortarContact. Its
 /// multiplier lambda_A belongs to the normalized weighted gap Phi_A = g_A /
-/// w_A (mortar.hpp), so -lambda_A = p_A w_A is the node's share of the normal
-/// force and p_A = -lambda_A / w_A its pressure (positive: compressive). At
-/// an equilibrium these are the static multipliers; after a time step of em
-/// or midpoint they are the constant contact force of that step.
+/// W_A (mortar.hpp), W_A the reference weight, and g_A = int N_A g dgamma is
+/// an integral over the current surface. The force lambda_A dPhi_A/dq on
+/// slave node B is then, where the gap is closed, p_A int N_A N_B n dgamma
+/// with p_A = -lambda_A / W_A: p = sum_A N_A p_A is the contact pressure as a
+/// force per current length (positive: compressive), and the node's share of
+/// the normal force (summed over B) is f_A = p_A w_A, w_A = int N_A dgamma
+/// its current weight over its mortar segments; as a vector, the force the
+/// master exerts on the slave through node A's multiplier is -p_A int N_A n
+/// dgamma (n the slave's outward normal). (Summing -lambda_A = p_A W_A
+/// instead misses the surface's stretch: 2 % on Hertz.) At an equilibrium
+/// these are the static multipliers; after a time step of em or midpoint they
+/// are the constant contact force of that step.
 struct SlavePressure {
-  int set = 0;          // index in System::unilateral()
-  int candidate = 0;    // index in the set (MortarContact::slave_node(candidate))
-  int node = 0;         // system node
-  double gap = 0.0;     // Phi_A(q) (+infinity when nothing lies opposite any more)
-  double weight = 0.0;  // w_A, reference configuration
-  double force = 0.0;   // -lambda_A = p_A w_A
-  double pressure = 0.0;
+  int set = 0;                       // index in System::unilateral()
+  int candidate = 0;                 // index in the set (MortarContact::slave_node(candidate))
+  int node = 0;                      // system node
+  double gap = 0.0;                  // Phi_A(q) (+infinity when nothing lies opposite any more)
+  double weight = 0.0;               // w_A, current configuration, over the mortar segments
+  double force = 0.0;                // p_A w_A
+  double resultant[2] = {0.0, 0.0};  // -p_A int N_A n dgamma: on the slave
+  double pressure = 0.0;             // p_A = -lambda_A / W_A, force per current length
 };
 
 /// The pressures of every active candidate of every MortarContact of

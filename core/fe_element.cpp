@@ -96,11 +96,18 @@ Q1Element::Q1Element(std::vector<int> dofs, const QuadNodes& x, const Material& 
 
 std::string Q1Element::describe() const {
   std::ostringstream s;
-  s << "Q1 element " << index_;
+  // The linear material's elements name their kind before " (": the
+  // recorder lists that kind among what breaks angular momentum.
+  if (material_.small_strain())
+    s << "linear elastic Q1 element (element " << index_;
+  else
+    s << "Q1 element " << index_;
   if (body_) s << " of body '" << *body_ << "'";
   if (n_local() == 8) {
-    s << " (nodes";
+    s << (material_.small_strain() ? "; nodes" : " (nodes");
     for (int a = 0; a < 4; ++a) s << " " << dofs()[static_cast<std::size_t>(2 * a)] / 2;
+    s << ")";
+  } else if (material_.small_strain()) {
     s << ")";
   }
   return s.str();
@@ -117,17 +124,35 @@ void Q1Element::invariants(const Vec& q, Vec& pi) const {
   pi.resize(n_invariants());
   for (int g = 0; g < kGaussPoints; ++g) {
     const Eigen::Matrix2d f = deformation_gradient(q, g);
+    if (material_.small_strain()) {
+      pi[3 * g + 0] = f(0, 0) - 1.0;
+      pi[3 * g + 1] = f(1, 1) - 1.0;
+      pi[3 * g + 2] = f(0, 1) + f(1, 0);
+      continue;
+    }
     pi[3 * g + 0] = f.col(0).squaredNorm();
     pi[3 * g + 1] = f.col(1).squaredNorm();
     pi[3 * g + 2] = f.col(0).dot(f.col(1));
   }
 }
 
-// dC_IJ/dq_Ai = dN_AI F_iJ + F_iI dN_AJ.
+// dC_IJ/dq_Ai = dN_AI F_iJ + F_iI dN_AJ; for the linear material
+// deps11/dq_Ax = dN_A1, deps22/dq_Ay = dN_A2, dgamma/dq_A = (dN_A2, dN_A1).
 void Q1Element::invariant_jacobian(const Vec& q, Mat& dpi) const {
   dpi.resize(n_invariants(), n_local());
   for (int g = 0; g < kGaussPoints; ++g) {
     const auto& dn = gp_[static_cast<std::size_t>(g)].dn;
+    if (material_.small_strain()) {
+      for (int a = 0; a < 4; ++a) {
+        dpi(3 * g + 0, 2 * a) = dn(a, 0);
+        dpi(3 * g + 0, 2 * a + 1) = 0.0;
+        dpi(3 * g + 1, 2 * a) = 0.0;
+        dpi(3 * g + 1, 2 * a + 1) = dn(a, 1);
+        dpi(3 * g + 2, 2 * a) = dn(a, 1);
+        dpi(3 * g + 2, 2 * a + 1) = dn(a, 0);
+      }
+      continue;
+    }
     const Eigen::Matrix2d f = deformation_gradient(q, g);
     for (int a = 0; a < 4; ++a)
       for (int i = 0; i < 2; ++i) {
@@ -142,6 +167,7 @@ void Q1Element::invariant_jacobian(const Vec& q, Mat& dpi) const {
 // sum_k w_k A_k = G (x) I_2 with G_AB = 2 dN_A^T Sw dN_B per Gauss point,
 // Sw = [w1, w3/2; w3/2, w2] (the factor 1/2 because C12 stands for C12 and C21).
 void Q1Element::add_invariant_hessians(const Vec& w, Mat& k) const {
+  if (material_.small_strain()) return;  // linear invariants: A_k = 0
   for (int g = 0; g < kGaussPoints; ++g) {
     const auto& dn = gp_[static_cast<std::size_t>(g)].dn;
     Eigen::Matrix2d sw;
@@ -175,8 +201,18 @@ double Q1Element::area() const {
 
 Eigen::Matrix2d Q1Element::second_piola_kirchhoff(const Vec& q, int gp) const {
   const Eigen::Matrix2d f = deformation_gradient(q, gp);
+  if (material_.small_strain())
+    return material_.second_piola_kirchhoff(
+        Eigen::Vector3d(f(0, 0) - 1.0, f(1, 1) - 1.0, f(0, 1) + f(1, 0)));
   const Eigen::Matrix2d c = f.transpose() * f;
   return material_.second_piola_kirchhoff(Eigen::Vector3d(c(0, 0), c(1, 1), c(0, 1)));
+}
+
+Eigen::Matrix2d Q1Element::cauchy_stress(const Vec& q, int gp) const {
+  const Eigen::Matrix2d s = second_piola_kirchhoff(q, gp);
+  if (material_.small_strain()) return s;
+  const Eigen::Matrix2d f = deformation_gradient(q, gp);
+  return f * s * f.transpose() / f.determinant();
 }
 
 Eigen::Matrix4d q1_mass_matrix(const QuadNodes& x, double density) {

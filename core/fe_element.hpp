@@ -13,6 +13,14 @@
 // point, f~_b = W(C_b) w_b J0_b (unit thickness), so the strain energy is
 // paper eq. (7) integrated by 2x2 Gauss. Dpi and sum_k w_k A_k are formed
 // from dN directly: no dense A_k is stored (meshes go up to 10^6 dofs).
+//
+// With the linear (small-strain) material the invariants are instead the
+// strain components (eps11, eps22, gamma12) = (F11 - 1, F22 - 1, F12 + F21)
+// of each Gauss point (core/material.hpp): linear in q (A_k = 0), translation-
+// but not rotation-invariant, so the element declares Symmetry{true, false}
+// and no angular momentum conservation is claimed for a system that has it.
+// Its energy is 1/2 (q - X)^T K (q - X), whose discrete gradient is K (q_mid - X):
+// em conserves it exactly.
 #pragma once
 
 #include <Eigen/Dense>
@@ -52,6 +60,9 @@ class Q1Element final : public Term {
   void block_hessian(int block, const VecRef& pi, double t, Eigen::Ref<Mat> h) const override;
 
   bool quadratic_in_invariants() const override { return material_.quadratic_in_invariants(); }
+  /// Translation-invariant always; rotation-invariant unless the material is
+  /// the linear one (its strain is not a function of C).
+  Symmetry symmetry() const override { return {true, !material_.small_strain()}; }
   PathSmoothness smoothness_between(int, const VecRef&, const VecRef&) const override {
     return PathSmoothness::Smooth;
   }
@@ -62,8 +73,12 @@ class Q1Element final : public Term {
   double area() const;
   /// F at Gauss point gp for the local positions q.
   Eigen::Matrix2d deformation_gradient(const Vec& q, int gp) const;
-  /// Second Piola-Kirchhoff stress S = 2 DW(C) at Gauss point gp.
+  /// Second Piola-Kirchhoff stress S = 2 DW(C) at Gauss point gp (linear
+  /// material: the small-strain stress sigma).
   Eigen::Matrix2d second_piola_kirchhoff(const Vec& q, int gp) const;
+  /// Cauchy stress F S F^T / det F at Gauss point gp (linear material: the
+  /// small-strain stress sigma, which linear theory does not tell apart).
+  Eigen::Matrix2d cauchy_stress(const Vec& q, int gp) const;
 
  private:
   struct GaussPoint {

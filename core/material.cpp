@@ -38,6 +38,8 @@ std::string material_model_name(MaterialModel model) {
       return "svk";
     case MaterialModel::NeoHooke:
       return "neo-hooke";
+    case MaterialModel::Linear:
+      return "linear";
   }
   return "unknown";
 }
@@ -45,7 +47,9 @@ std::string material_model_name(MaterialModel model) {
 MaterialModel parse_material_model(const std::string& name) {
   if (name == "svk" || name == "saint-venant-kirchhoff") return MaterialModel::SaintVenantKirchhoff;
   if (name == "neo-hooke" || name == "neohooke") return MaterialModel::NeoHooke;
-  throw std::invalid_argument("unknown material model '" + name + "' (known: svk, neo-hooke)");
+  if (name == "linear" || name == "linear-elastic") return MaterialModel::Linear;
+  throw std::invalid_argument("unknown material model '" + name +
+                              "' (known: svk, neo-hooke, linear)");
 }
 
 Material make_material(MaterialModel model, double young, double poisson, double density) {
@@ -71,6 +75,11 @@ Material make_material(MaterialModel model, double young, double poisson, double
 }
 
 double Material::energy(const Eigen::Vector3d& pi) const {
+  if (model == MaterialModel::Linear) {
+    // eps : eps = eps11^2 + eps22^2 + 2 eps12^2 = eps11^2 + eps22^2 + gamma^2 / 2.
+    const double tr = pi[0] + pi[1];
+    return 0.5 * lambda * tr * tr + mu * (pi[0] * pi[0] + pi[1] * pi[1] + 0.5 * pi[2] * pi[2]);
+  }
   if (model == MaterialModel::SaintVenantKirchhoff) {
     // tr E = (pi1 + pi2 - 2)/2, tr E^2 = ((pi1-1)^2 + (pi2-1)^2 + 2 pi3^2)/4.
     const double tr = pi[0] + pi[1] - 2.0;
@@ -84,6 +93,10 @@ double Material::energy(const Eigen::Vector3d& pi) const {
 }
 
 Eigen::Vector3d Material::energy_gradient(const Eigen::Vector3d& pi) const {
+  if (model == MaterialModel::Linear) {
+    const double a = lambda * (pi[0] + pi[1]);
+    return {a + 2.0 * mu * pi[0], a + 2.0 * mu * pi[1], mu * pi[2]};  // sigma11, sigma22, sigma12
+  }
   if (model == MaterialModel::SaintVenantKirchhoff) {
     const double a = lambda / 4.0 * (pi[0] + pi[1] - 2.0);
     return {a + mu / 2.0 * (pi[0] - 1.0), a + mu / 2.0 * (pi[1] - 1.0), mu * pi[2]};
@@ -95,6 +108,12 @@ Eigen::Vector3d Material::energy_gradient(const Eigen::Vector3d& pi) const {
 
 Eigen::Matrix3d Material::energy_hessian(const Eigen::Vector3d& pi) const {
   Eigen::Matrix3d h = Eigen::Matrix3d::Zero();
+  if (model == MaterialModel::Linear) {
+    h(0, 0) = h(1, 1) = lambda + 2.0 * mu;
+    h(0, 1) = h(1, 0) = lambda;
+    h(2, 2) = mu;
+    return h;
+  }
   if (model == MaterialModel::SaintVenantKirchhoff) {
     h(0, 0) = h(1, 1) = lambda / 4.0 + mu / 2.0;
     h(0, 1) = h(1, 0) = lambda / 4.0;
@@ -115,7 +134,10 @@ Eigen::Matrix3d Material::energy_hessian(const Eigen::Vector3d& pi) const {
 Eigen::Matrix2d Material::second_piola_kirchhoff(const Eigen::Vector3d& pi) const {
   const Eigen::Vector3d g = energy_gradient(pi);
   Eigen::Matrix2d s;
-  s << 2.0 * g[0], g[2], g[2], 2.0 * g[1];
+  if (model == MaterialModel::Linear)
+    s << g[0], g[2], g[2], g[1];  // sigma = dW/deps
+  else
+    s << 2.0 * g[0], g[2], g[2], 2.0 * g[1];
   return s;
 }
 

@@ -19,7 +19,24 @@
 //     W = lambda/2 (tr E)^2 + mu tr(E^2)            quadratic in pi;
 //   compressible Neo-Hooke, J = sqrt(det C),
 //     W = mu/2 (tr C - 2) - mu ln J + lambda/2 (ln J)^2
-//   (tr and det of the 2x2 block: C33 = 1 contributes tr 1 - 1 = 0, ln 1 = 0).
+//   (tr and det of the 2x2 block: C33 = 1 contributes tr 1 - 1 = 0, ln 1 = 0);
+//   linear elastic (small strain), eps = sym(F) - I = sym(grad u),
+//     W = lambda/2 (tr eps)^2 + mu eps : eps.
+//
+// The linear material is the one exception to "a function of C": eps is not a
+// function of C, so W is not invariant under rotations of the current
+// configuration (a rigid rotation by theta strains it by (cos theta - 1) I and
+// stresses it). Its invariants are not the components of C but those of the
+// strain itself,
+//
+//   pi = (eps11, eps22, gamma12),   gamma12 = 2 eps12 = F12 + F21,
+//
+// linear in q (quadratic forms with A = 0), so that W is quadratic in pi and
+// the discrete gradient is the gradient at the midpoint, exactly: energy and
+// linear momentum are conserved by em, angular momentum is not (Q1Element
+// declares no rotational symmetry for it). For this model the stress
+// functions return the small-strain stress sigma = lambda tr(eps) I + 2 mu eps,
+// the only stress linear theory knows (dW/dpi = (sigma11, sigma22, sigma12)).
 #pragma once
 
 #include <Eigen/Dense>
@@ -27,9 +44,9 @@
 
 namespace emdae {
 
-enum class MaterialModel { SaintVenantKirchhoff, NeoHooke };
+enum class MaterialModel { SaintVenantKirchhoff, NeoHooke, Linear };
 
-/// Name used in scene files and messages: "svk" or "neo-hooke".
+/// Name used in scene files and messages: "svk", "neo-hooke" or "linear".
 std::string material_model_name(MaterialModel model);
 /// Inverse of material_model_name; throws std::invalid_argument naming the
 /// value received and the known names.
@@ -45,19 +62,24 @@ struct Material {
   double lambda = 0.0;   // E nu / ((1 + nu)(1 - 2 nu))
   double mu = 0.0;       // E / (2 (1 + nu))
 
-  /// W(pi), pi = (C11, C22, C12). +infinity when det C <= 0 for Neo-Hooke
-  /// (the energy barrier of an inverted material point).
+  /// W(pi), pi = (C11, C22, C12) (linear: pi = (eps11, eps22, gamma12)).
+  /// +infinity when det C <= 0 for Neo-Hooke (the energy barrier of an
+  /// inverted material point).
   double energy(const Eigen::Vector3d& pi) const;
   /// dW/dpi (note the factor 2 on the C12 component, see above).
   Eigen::Vector3d energy_gradient(const Eigen::Vector3d& pi) const;
   /// d^2 W / dpi^2.
   Eigen::Matrix3d energy_hessian(const Eigen::Vector3d& pi) const;
-  /// Second Piola-Kirchhoff stress S = 2 DW(C) as a symmetric 2x2 matrix.
+  /// Second Piola-Kirchhoff stress S = 2 DW(C) as a symmetric 2x2 matrix
+  /// (linear: the small-strain stress sigma = DW(eps)).
   Eigen::Matrix2d second_piola_kirchhoff(const Eigen::Vector3d& pi) const;
 
   /// True when W is (at most) quadratic in pi, so that the discrete gradient
   /// is the gradient at pi_mid (paper eq. (38)) and needs no correction.
-  bool quadratic_in_invariants() const { return model == MaterialModel::SaintVenantKirchhoff; }
+  bool quadratic_in_invariants() const { return model != MaterialModel::NeoHooke; }
+  /// True for the linear material: pi are strains, not components of C, and
+  /// W is not frame-indifferent (see above).
+  bool small_strain() const { return model == MaterialModel::Linear; }
   /// E.g. "svk (E = 100, nu = 0.1, rho = 0.001)".
   std::string describe() const;
 };

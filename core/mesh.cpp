@@ -168,6 +168,168 @@ Mesh rectangle_mesh(const Eigen::Vector2d& origin, double width, double height, 
   return m;
 }
 
+namespace {
+
+// p turned by q quarter turns counter-clockwise, exactly (no cos(pi/2) = 6e-17).
+template <class V>
+V quarter_turns(V p, int q) {
+  for (int k = 0; k < ((q % 4) + 4) % 4; ++k) p = V(-p[1], p[0]);
+  return p;
+}
+
+// The edges of `edges` chained head to tail: from the edge whose start ends
+// no other edge, or for a closed loop from `first`'s edge.
+std::vector<std::array<int, 2>> chain(const std::vector<std::array<int, 2>>& edges, int first) {
+  std::map<int, std::size_t> from;
+  std::map<int, int> ends;
+  for (std::size_t e = 0; e < edges.size(); ++e) {
+    from[edges[e][0]] = e;
+    ++ends[edges[e][1]];
+  }
+  std::size_t start = from.count(first) ? from[first] : 0;
+  for (std::size_t e = 0; e < edges.size(); ++e)
+    if (!ends.count(edges[e][0])) start = e;
+  std::vector<std::array<int, 2>> out;
+  std::size_t e = start;
+  while (out.size() < edges.size()) {
+    out.push_back(edges[e]);
+    const auto next = from.find(edges[e][1]);
+    if (next == from.end() || next->second == start) break;
+    e = next->second;
+  }
+  return out;
+}
+
+}  // namespace
+
+Mesh disk_mesh(const Eigen::Vector2d& centre, double radius, int per_quarter, int radial,
+               int first_quadrant, int quadrants) {
+  check_length(radius, "disk radius");
+  if (per_quarter < 2 || per_quarter % 2 != 0)
+    throw std::invalid_argument(
+        "disk elements per quarter of the circle must be even and >= 2, received " +
+        std::to_string(per_quarter));
+  check_count(radial, "disk elements from the central square to the circle");
+  if (quadrants < 1 || quadrants > 4)
+    throw std::invalid_argument("disk quadrants must be 1 .. 4, received " +
+                                std::to_string(quadrants));
+
+  const int m = per_quarter / 2, k = radial, n = 8 * m, side = 2 * m + 1;
+  const double s = 0.5 * radius, pi = std::acos(-1.0);
+  // The full disk's nodes relative to the centre; the sector's are picked below.
+  std::vector<Eigen::Vector2d> x;
+  std::vector<bool> on_circle;
+  const auto square_node = [&](int i, int j) { return (j + m) * side + (i + m); };
+  for (int j = -m; j <= m; ++j)
+    for (int i = -m; i <= m; ++i) {
+      x.emplace_back(s * i / m, s * j / m);
+      on_circle.push_back(false);
+    }
+  // Perimeter position t (counter-clockwise from (s, 0)) of the square, and
+  // the circle's point at the same position: quadrant t / 2m, and within it
+  // u = t mod 2m, from the +x axis up to the corner (u = m) and on to +y.
+  const auto perimeter = [&](int t) {
+    t = ((t % n) + n) % n;
+    const int u = t % (2 * m);
+    const std::array<int, 2> ij =
+        u <= m ? std::array<int, 2>{m, u} : std::array<int, 2>{2 * m - u, m};
+    const Eigen::Vector2i turned = quarter_turns(Eigen::Vector2i(ij[0], ij[1]), t / (2 * m));
+    return square_node(turned[0], turned[1]);
+  };
+  const auto circle = [&](int t) {
+    const int u = t % (2 * m);
+    const double phi = 0.5 * pi * u / (2 * m);
+    return quarter_turns(Eigen::Vector2d(radius * std::cos(phi), radius * std::sin(phi)),
+                         t / (2 * m));
+  };
+  const auto node = [&](int l, int t) {
+    return l == 0 ? perimeter(t) : side * side + (l - 1) * n + ((t % n) + n) % n;
+  };
+  for (int l = 1; l <= k; ++l)
+    for (int t = 0; t < n; ++t) {
+      const Eigen::Vector2d p = x[static_cast<std::size_t>(perimeter(t))], c = circle(t);
+      x.push_back(l == k ? c : Eigen::Vector2d(p + (c - p) * (static_cast<double>(l) / k)));
+      on_circle.push_back(l == k);
+    }
+
+  // The quads of the sector's quadrants, counter-clockwise.
+  const auto in_sector = [&](int quadrant) {
+    return (((quadrant - first_quadrant) % 4) + 4) % 4 < quadrants;
+  };
+  std::vector<std::array<int, 4>> quads;
+  for (int j = -m; j < m; ++j)
+    for (int i = -m; i < m; ++i) {
+      const int quadrant = j >= 0 ? (i >= 0 ? 0 : 1) : (i < 0 ? 2 : 3);
+      if (in_sector(quadrant))
+        quads.push_back({square_node(i, j), square_node(i + 1, j), square_node(i + 1, j + 1),
+                         square_node(i, j + 1)});
+    }
+  // (radial, around) -> X preserves orientation, as for the ring.
+  for (int l = 0; l < k; ++l)
+    for (int t = 0; t < n; ++t)
+      if (in_sector(t / (2 * m)))
+        quads.push_back({node(l, t), node(l + 1, t), node(l + 1, t + 1), node(l, t + 1)});
+
+  // Keep the nodes the quads use, in their order.
+  Mesh mesh;
+  std::vector<int> index(x.size(), -1);
+  for (auto& q : quads)
+    for (int& a : q) {
+      auto& i = index[static_cast<std::size_t>(a)];
+      if (i < 0) {
+        i = mesh.n_nodes();
+        mesh.nodes.push_back(centre + x[static_cast<std::size_t>(a)]);
+      }
+      a = i;
+    }
+  mesh.quads = std::move(quads);
+  const auto new_index = [&](int a) { return index[static_cast<std::size_t>(a)]; };
+  mesh.node_sets["centre"] = {new_index(square_node(0, 0))};
+
+  // Boundary edges: those of one quad only, oriented as that quad runs them.
+  std::map<std::pair<int, int>, int> count;
+  for (const auto& q : mesh.quads)
+    for (std::size_t a = 0; a < 4; ++a) {
+      const int p = q[a], r = q[(a + 1) % 4];
+      ++count[{std::min(p, r), std::max(p, r)}];
+    }
+  std::vector<bool> rim(static_cast<std::size_t>(mesh.n_nodes()), false);
+  for (std::size_t a = 0; a < x.size(); ++a)
+    if (index[a] >= 0 && on_circle[a]) rim[static_cast<std::size_t>(index[a])] = true;
+  std::map<std::string, std::vector<std::array<int, 2>>> sides;
+  for (const auto& q : mesh.quads)
+    for (std::size_t a = 0; a < 4; ++a) {
+      const int p = q[a], r = q[(a + 1) % 4];
+      if (count[{std::min(p, r), std::max(p, r)}] != 1) continue;
+      if (rim[static_cast<std::size_t>(p)] && rim[static_cast<std::size_t>(r)]) {
+        sides["outer"].push_back({p, r});
+        continue;
+      }
+      // A straight cut: named by its outward normal (dy, -dx).
+      const Eigen::Vector2d d =
+          mesh.nodes[static_cast<std::size_t>(r)] - mesh.nodes[static_cast<std::size_t>(p)];
+      const char* name = std::abs(d.y()) > std::abs(d.x()) ? (d.y() < 0 ? "left" : "right")
+                                                           : (d.x() > 0 ? "bottom" : "top");
+      sides[name].push_back({p, r});
+    }
+  // A full circle starts at angle 0 (the ring's convention).
+  const int first_rim = new_index(node(k, 0));
+  for (auto& [name, edges] : sides) {
+    auto& chained = mesh.edge_sets[name];
+    chained = chain(edges, first_rim);
+    auto& nodes = mesh.node_sets[name];
+    nodes.push_back(chained.front()[0]);
+    for (const auto& e : chained)
+      if (e[1] != chained.front()[0]) nodes.push_back(e[1]);
+  }
+  mesh.description = fmt::format(
+      "disk, radius {} about ({}, {}), {} of 4 quadrants from quadrant {}, {} elements "
+      "per quarter circle, {} radially, {} elements",
+      radius, centre.x(), centre.y(), quadrants, first_quadrant, per_quarter, radial,
+      mesh.n_elements());
+  return mesh;
+}
+
 void grade_mesh(Mesh& mesh, const Eigen::Vector2d& lo, const Eigen::Vector2d& hi,
                 const Eigen::Vector2d& centre, const Eigen::Vector2d& power) {
   for (int d = 0; d < 2; ++d) {

@@ -64,6 +64,31 @@ Mesh ring_mesh(const Eigen::Vector2d& centre, double inner_radius, double outer_
 /// "bottom", "top".
 Mesh rectangle_mesh(const Eigen::Vector2d& origin, double width, double height, int nx, int ny);
 
+/// Solid disk of radius `radius` about `centre`, or a sector of it: an
+/// O-grid of a central square (half-side radius / 2) and, around it,
+/// `radial` layers of mapped quads whose radial lines run straight from the
+/// square's boundary to the circle. Per quadrant (quarter of the plane about
+/// the centre): (per_quarter / 2)^2 square elements and per_quarter x radial
+/// ring elements; per_quarter elements along each quarter of the circle
+/// (equal angles), so per_quarter must be even. The square's corners face
+/// the diagonals, where two ring elements meet at 135 degrees; no element is
+/// degenerate (interior angles between about 45 and 135 degrees). Nodes on
+/// the circle lie on it to round-off, nodes on the straight cuts exactly on
+/// the lines through the centre.
+///
+/// The sector is `quadrants` (1 .. 4) quadrants starting at quadrant
+/// `first_quadrant` (quadrant q spans the angles 90 q .. 90 (q + 1) degrees,
+/// counter-clockwise from +x; any integer, taken mod 4): 4 is the full disk,
+/// 2 with first_quadrant -1 the right half (x >= centre), 1 with
+/// first_quadrant -1 the lower right quarter. Sets: "outer" (the arc,
+/// counter-clockwise), "centre" (the node at the centre; a node set only),
+/// and each straight cut named by the side of the body it bounds: "left"
+/// (outward normal -x), "right", "bottom", "top". A half disk's cut is one
+/// set (the diameter); a quarter has two. Node sets are ordered along the
+/// boundary, edge sets oriented with the body on their left.
+Mesh disk_mesh(const Eigen::Vector2d& centre, double radius, int per_quarter, int radial,
+               int first_quadrant = 0, int quadrants = 4);
+
 /// Grades a mesh filling the box [lo, hi] towards the point `centre` of the
 /// box, each coordinate by itself: x -> c + (x - c) (|x - c| / L)^(p - 1),
 /// L the distance from c to the box's side on x's side, p = power[0] (y

@@ -137,7 +137,7 @@ bool ActiveSet::algebraic(int id) const {
   return true;
 }
 
-ActiveSet::Targets ActiveSet::targets(const State& s) const {
+ActiveSet::Targets ActiveSet::targets(const State& s, const std::vector<int>& keep) const {
   Targets t;
   t.gap = Vec::Zero(static_cast<Eigen::Index>(s.active.size()));
   t.closed = Vec::Zero(static_cast<Eigen::Index>(s.active.size()));
@@ -145,7 +145,8 @@ ActiveSet::Targets ActiveSet::targets(const State& s) const {
     const double g = gap(s.active[k], s.q);
     // A penalized node has no target (its row is its force law) and is
     // never an entry to correct.
-    const bool closed = std::abs(g) <= tol_ || penalized(s.active[k]);
+    const bool closed = std::abs(g) <= tol_ || penalized(s.active[k]) ||
+                        (std::isfinite(g) && contains(keep, s.active[k]));
     t.closed[static_cast<Eigen::Index>(k)] = closed ? 1.0 : 0.0;
     t.gap[static_cast<Eigen::Index>(k)] =
         persistency_ && closed && !algebraic(s.active[k]) && !penalized(s.active[k]) ? g : 0.0;

@@ -22,7 +22,12 @@
 // price lambda Phi(q_0): that price was what lost energy in very short
 // sub-steps (lambda ~ 2 m v / tau as tau -> 0; the flat-face blocks lost
 // 3e-4 of their energy in one sub-step of 2e-8). A node entering open (no
-// impact location) is pulled to Phi = 0 at the end of the step.
+// impact location) is pulled to Phi = 0 at the end of the step. A node that
+// entered at a jump of its engagement (Phi from +infinity to below -tol: a
+// master segment's end moving over its slave segments with the sliver
+// already inside, integrators/contact_step.cpp) keeps the gap it entered
+// with as long as it stays active: energy is conserved, and that gap is
+// reported as the active gap violation it is (docs/hard-cases.md).
 //
 // Events. A contact event is an entry (a node inactive at the start of an
 // accepted (sub-)step and active at its end) or an exit (the reverse).
@@ -105,7 +110,9 @@ class ActiveSet {
   struct Targets {
     Vec gap, closed;
   };
-  Targets targets(const State& s) const;
+  /// `keep`: active nodes that keep their gap whatever it is (entered at a
+  /// jump of their function: ContactStepper::locate).
+  Targets targets(const State& s, const std::vector<int>& keep = {}) const;
 
   /// Minimum of Phi over `ids` at q (+infinity when empty).
   double min_gap(const std::vector<int>& ids, const Vec& q) const;

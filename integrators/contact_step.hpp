@@ -100,6 +100,9 @@ class ContactStepper {
   ImpactTreatment impact_;
   ImpactCounters counters_;
   double last_h_ = 0.0;  // length of the last accepted sub-step
+  // Active nodes that entered at a jump of their function and keep their
+  // gap as target (locate()).
+  std::vector<int> kept_;
 };
 
 }  // namespace emdae

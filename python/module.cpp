@@ -472,6 +472,11 @@ void bind_model(py::module_& m) {
   m.def("ring_mesh", &ring_mesh, py::arg("centre"), py::arg("inner_radius"),
         py::arg("outer_radius"), py::arg("n_circumferential"), py::arg("n_radial"),
         "A ring of Q1 elements; node and edge sets 'inner' and 'outer'.");
+  m.def("disk_mesh", &disk_mesh, py::arg("centre"), py::arg("radius"), py::arg("per_quarter"),
+        py::arg("radial"), py::arg("first_quadrant") = 0, py::arg("quadrants") = 4,
+        "A solid disk (or `quadrants` quarters of it from `first_quadrant`, quadrant q "
+        "spanning 90 q .. 90 (q + 1) degrees) of Q1 elements, an O-grid; sets 'outer', "
+        "'centre' and the straight cuts 'left', 'right', 'bottom', 'top'.");
   m.def("rectangle_mesh", &rectangle_mesh, py::arg("origin"), py::arg("width"), py::arg("height"),
         py::arg("nx"), py::arg("ny"),
         "A rectangle of Q1 elements; sets 'left', 'right', 'bottom', 'top'.");
@@ -487,13 +492,16 @@ void bind_model(py::module_& m) {
           mm = MaterialModel::SaintVenantKirchhoff;
         else if (model == "neo-hooke")
           mm = MaterialModel::NeoHooke;
+        else if (model == "linear")
+          mm = MaterialModel::Linear;
         else
-          throw ModelError("model",
-                           "unknown material model \"" + model + "\" (models: svk, neo-hooke)");
+          throw ModelError(
+              "model", "unknown material model \"" + model + "\" (models: svk, neo-hooke, linear)");
         return make_material(mm, young, poisson, density);
       },
       py::arg("model"), py::arg("young"), py::arg("poisson"), py::arg("density"),
-      "A material: model 'svk' or 'neo-hooke', Young's modulus, Poisson's ratio, density.");
+      "A material: model 'svk', 'neo-hooke' or 'linear' (small strain, not frame-indifferent), "
+      "Young's modulus, Poisson's ratio, density.");
 
   py::class_<Model>(m, "Model",
                     "What a scene declares, built by calls: particles, springs, links, FE "

@@ -59,8 +59,8 @@ std::vector<ContactNode> contact_nodes(const Model& model, const State& state) {
       if (pair.set != p.set) continue;
       const int offset = model.find_set(pair.slave, Model::SetKind::Edges).first->info.node_offset;
       const Eigen::Vector2d x = state.q.segment<2>(2 * p.node);
-      out.push_back(
-          {pair.name, p.node - offset, x.x(), x.y(), p.gap, p.pressure, p.weight, p.force});
+      out.push_back({pair.name, p.node - offset, x.x(), x.y(), p.gap, p.pressure, p.weight, p.force,
+                     p.resultant[0], p.resultant[1]});
     }
   }
   return out;

@@ -31,7 +31,8 @@ std::string Builder::unique_name(const Fields& f, std::vector<std::string>& take
 }
 
 Mesh Builder::mesh(const Fields& f) {
-  const Fields m = f.table("mesh", "{type = \"ring\" | \"rectangle\" | \"gmsh\", ...}", "a mesh");
+  const Fields m =
+      f.table("mesh", "{type = \"ring\" | \"disk\" | \"rectangle\" | \"gmsh\", ...}", "a mesh");
   Mesh mesh = generated_mesh(m);
   // Any mesh may be turned about its area centroid (a square on its corner).
   if (const auto degrees = m.optional_number("rotation")) {
@@ -56,7 +57,7 @@ void Builder::charge_elements(const Fields& m, std::string_view k, double elemen
 }
 
 Mesh Builder::generated_mesh(const Fields& m) {
-  const std::string type = m.string("type", "\"ring\", \"rectangle\" or \"gmsh\"");
+  const std::string type = m.string("type", "\"ring\", \"disk\", \"rectangle\" or \"gmsh\"");
   // Element counts beyond this are a typo, not a mesh (and would overflow).
   constexpr long kMaxCount = 100000, kMaxElements = 10000000;
   if (type == "ring") {
@@ -77,6 +78,46 @@ Mesh Builder::generated_mesh(const Fields& m) {
     charge_elements(m, "through", static_cast<double>(around * through));
     return ring_mesh(Eigen::Vector2d(c[0], c[1]), r_in, r_out, static_cast<int>(around),
                      static_cast<int>(through));
+  }
+  if (type == "disk") {
+    // A solid disk or a half/quarter of it (core/mesh.hpp, disk_mesh).
+    m.only({"type", "centre", "radius", "per_quarter", "radial", "sector", "rotation"});
+    const Vec c = m.vector("centre", 2, "the disk's centre, 2 numbers");
+    const double r = m.positive("radius", "the radius, a positive number");
+    if (!m.has("per_quarter"))
+      m.require("per_quarter", "elements along a quarter of the circle, an even integer >= 2");
+    if (!m.has("radial"))
+      m.require("radial", "elements from the central square to the circle, an integer >= 1");
+    const long per_quarter = m.integer_in("per_quarter", 0, 2, kMaxCount);
+    if (per_quarter % 2 != 0)
+      m.fail_key("per_quarter",
+                 "must be even (the central square has per_quarter / 2 elements "
+                 "a side in each quadrant), received " +
+                     show(*m.find("per_quarter")));
+    const long radial = m.integer_in("radial", 0, 1, kMaxCount);
+    // Sector [from, to] in degrees, multiples of 90, 90 .. 360 wide.
+    int first = 0, quadrants = 4;
+    if (const auto sector = m.optional_vector("sector", 2)) {
+      const double from = (*sector)[0], to = (*sector)[1];
+      const auto quarter = [](double a) {
+        return std::abs(a / 90.0 - std::round(a / 90.0)) < 1e-12;
+      };
+      if (!(std::abs(from) <= 360.0 && std::abs(to) <= 720.0 && quarter(from) && quarter(to) &&
+            to > from && to - from <= 360.0))
+        m.fail_key("sector",
+                   "must be [from, to] in degrees, multiples of 90 with from in [-360, 360] and "
+                   "to - from = 90, 180, 270 or 360 (e.g. [-90, 90]: the right half), received " +
+                       show(*m.find("sector")));
+      first = static_cast<int>(std::lround(from / 90.0));
+      quadrants = static_cast<int>(std::lround((to - from) / 90.0));
+    }
+    const long per_quadrant = per_quarter * per_quarter / 4 + per_quarter * radial;
+    if (per_quadrant * quadrants > kMaxElements)
+      m.fail_key("radial", fmt::format("{} elements is more than {} in one body, received {}",
+                                       per_quadrant * quadrants, kMaxElements, radial));
+    charge_elements(m, "radial", static_cast<double>(per_quadrant * quadrants));
+    return disk_mesh(Eigen::Vector2d(c[0], c[1]), r, static_cast<int>(per_quarter),
+                     static_cast<int>(radial), first, quadrants);
   }
   if (type == "rectangle") {
     m.only(
@@ -136,7 +177,7 @@ Mesh Builder::generated_mesh(const Fields& m) {
     return mesh;
   }
   m.fail_key("type", "unknown mesh type, received " + show(*m.find("type")) +
-                         hint(type, {"ring", "rectangle", "gmsh"}, "mesh types"));
+                         hint(type, {"ring", "disk", "rectangle", "gmsh"}, "mesh types"));
 }
 
 Material Builder::material(const Fields& f) const {
@@ -148,7 +189,7 @@ Material Builder::material(const Fields& f) const {
       model = parse_material_model(*name);
     } catch (const std::invalid_argument&) {
       m.fail_key("model", "unknown material model, received " + show(*m.find("model")) +
-                              hint(*name, {"svk", "neo-hooke"}, "models"));
+                              hint(*name, {"svk", "neo-hooke", "linear"}, "models"));
     }
   }
   const double young = m.positive("young", "Young's modulus E, a positive number");

@@ -4,11 +4,14 @@
 //  - the discrete gradient of the node gap satisfies the energy identity
 //    through changes of segmentation, and the gap is invariant under rigid
 //    motions (which is what gives momentum conservation);
+//  - the current mortar weight (the contact force's length) against
+//    closed forms: stretched, turned and partly uncovered surfaces;
 //  - two-ring impact: energy, linear and angular momentum conserved through
 //    the impact with impact location on, gaps of active nodes closed, no
 //    penetration; with impact location off the energy error it removes shows.
 #include <gtest/gtest.h>
 
+#include <Eigen/Geometry>
 #include <cmath>
 #include <random>
 
@@ -116,6 +119,36 @@ TEST(MortarGapTerm, InvariantUnderRigidMotion) {
       moved.segment<2>(2 * n) = r * q.segment<2>(2 * n) + Eigen::Vector2d(3, -1);
     EXPECT_NEAR(term->value(moved, 0), term->value(q, 0), 1e-13);
   }
+}
+
+// The current weight w_A = int N_A dgamma over the mortar segments, and
+// int N_A n dgamma: 1 and (0, -1) for the middle node of unit slave segments
+// fully opposite the master; it follows the surface's stretch and turns
+// with it (the reference weight does neither); where the master leaves part
+// of a segment uncovered, only the covered part counts.
+TEST(MortarGapTerm, CurrentWeightIsOverTheCurrentMortarSegments) {
+  auto term = node_term();
+  std::mt19937 rng(1);
+  const Vec q = node_config(rng, 0.0);
+  MortarGapTerm::CurrentWeight w = term->current_weight(q);
+  EXPECT_NEAR(w.length, 1.0, 1e-15);
+  EXPECT_NEAR(w.normal[0], 0.0, 1e-15);
+  EXPECT_NEAR(w.normal[1], -1.0, 1e-15);
+  const double a = 0.7, stretch = 1.5;
+  Vec moved(14);
+  for (int n = 0; n < 7; ++n)
+    moved.segment<2>(2 * n) =
+        Eigen::Rotation2Dd(a) * Eigen::Vector2d(stretch * q[2 * n], q[2 * n + 1]);
+  w = term->current_weight(moved);
+  EXPECT_NEAR(w.length, stretch, 1e-14);
+  EXPECT_NEAR(w.normal[0], stretch * std::sin(a), 1e-14);
+  EXPECT_NEAR(w.normal[1], -stretch * std::cos(a), 1e-14);
+  EXPECT_EQ(term->weight(), 1.0);
+  // The master's last segment turned away (it no longer faces the slave):
+  // x in [0, 0.4] of segment (0, 1) is uncovered, int_0.4^1 x dx = 0.42.
+  Vec partial = q;
+  partial[12] = 0.9;
+  EXPECT_NEAR(term->current_weight(partial).length, 0.42 + 0.5, 1e-14);
 }
 
 // A run of the scene through the library; its summary holds the figures.

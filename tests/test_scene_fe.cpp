@@ -18,6 +18,7 @@
 #include <string>
 #include <vector>
 
+#include "core/fe_element.hpp"
 #include "core/quantities.hpp"
 #include "fe_scenes.hpp"
 #include "integrators/driver.hpp"
@@ -53,6 +54,11 @@ using test_systems::Malformed;
 using test_systems::ring;
 using test_systems::with;
 
+// A disk body's name and material; its [bodies.mesh] follows.
+const std::string kDisk =
+    "[[bodies]]\nname = \"d\"\n"
+    "material = { young = 10.0, poisson = 0.3, density = 1.0 }\n";
+
 std::vector<Malformed> malformed_fe_scenes() {
   return {
       {"poisson_half",
@@ -82,6 +88,10 @@ std::vector<Malformed> malformed_fe_scenes() {
        with(kValid, "model = \"svk\"", "model = \"neohook\""),
        "neohook",
        {"key 'bodies[0].material.model'", "did you mean 'neo-hooke'?", "received \"neohook\""}},
+      {"unknown_model_near_linear",
+       with(kValid, "model = \"svk\"", "model = \"linar\""),
+       "linar",
+       {"key 'bodies[0].material.model'", "did you mean 'linear'?", "received \"linar\""}},
       {"unknown_edge_set",
        with(kValid, "slave = \"a.outer\"", "slave = \"a.outr\""),
        "a.outr",
@@ -116,7 +126,37 @@ std::vector<Malformed> malformed_fe_scenes() {
       {"mesh_type_unknown",
        with(kValid, "type = \"ring\"", "type = \"annulus\""),
        "annulus",
-       {"key 'bodies[0].mesh.type'", "mesh types: ring, rectangle"}},
+       {"key 'bodies[0].mesh.type'", "mesh types: ring, disk, rectangle"}},
+      {"disk_per_quarter_odd",
+       kTime + kDisk +
+           "[bodies.mesh]\ntype = \"disk\"\ncentre = [0.0, 0.0]\nradius = 1.0\n"
+           "per_quarter = 5\nradial = 2\n",
+       "per_quarter = 5",
+       {"key 'bodies[0].mesh.per_quarter'", "must be even", "received 5"}},
+      {"disk_sector_not_quarters",
+       kTime + kDisk +
+           "[bodies.mesh]\ntype = \"disk\"\ncentre = [0.0, 0.0]\nradius = 1.0\n"
+           "per_quarter = 4\nradial = 2\nsector = [0.0, 45.0]\n",
+       "sector =",
+       {"key 'bodies[0].mesh.sector'", "multiples of 90", "to - from = 90, 180, 270 or 360"}},
+      {"disk_sector_backwards",
+       kTime + kDisk +
+           "[bodies.mesh]\ntype = \"disk\"\ncentre = [0.0, 0.0]\nradius = 1.0\n"
+           "per_quarter = 4\nradial = 2\nsector = [90, -90]\n",
+       "sector =",
+       {"key 'bodies[0].mesh.sector'", "[from, to]"}},
+      {"disk_without_radial",
+       kTime + kDisk +
+           "[bodies.mesh]\ntype = \"disk\"\ncentre = [0.0, 0.0]\nradius = 1.0\n"
+           "per_quarter = 4\n",
+       "[bodies.mesh]",
+       {"key 'bodies[0].mesh.radial'", "missing"}},
+      {"disk_radius_negative",
+       kTime + kDisk +
+           "[bodies.mesh]\ntype = \"disk\"\ncentre = [0.0, 0.0]\nradius = -1.0\n"
+           "per_quarter = 4\nradial = 2\n",
+       "radius = -1.0",
+       {"key 'bodies[0].mesh.radius'", "must be positive", "received -1.0"}},
       {"mesh_key_misspelt",
        with(kValid, "through = 1", "thru = 1"),
        "thru",
@@ -405,6 +445,43 @@ TEST(SceneFe, DirichletFixesAndDrivesNodes) {
   EXPECT_FALSE(s.symmetry().translation);
 }
 
+// A roller on a symmetry line, in dynamics: a half disk (sector [-90, 90])
+// whose cut `left` is held in x (components = "x") flies upwards at 1 and is
+// pushed sideways by a hat-shaped body force. Its cut's x dofs are
+// eliminated and nothing else: the em run conserves energy once the load is
+// off and balances it while on (the work of the load), and the momenta
+// balance with the roller's and the load's impulses (x: the roller takes
+// the push; y: nothing acts, the body keeps m v0).
+TEST(SceneFe, RollerOnAHalfDiskHoldsOneComponent) {
+  TempDir dir;
+  const std::string scene =
+      "[time]\ndt = 0.01\nt_end = 1.0\n"
+      "[[bodies]]\nname = \"disk\"\nvelocity = [0.0, 1.0]\n"
+      "mesh = { type = \"disk\", centre = [0.0, 0.0], radius = 1.0, per_quarter = 4, radial = 2, "
+      "sector = [-90, 90] }\n"
+      "material = { young = 100.0, poisson = 0.3, density = 1.0 }\n"
+      "[[dirichlet]]\nnodes = \"disk.left\"\nfixed = true\ncomponents = \"x\"\n"
+      "[[loads]]\ntype = \"body_force\"\nbody = \"disk\"\nacceleration = [-2.0, 0.0]\n"
+      "time_function = { type = \"hat\", start = 0.0, peak = 0.25, end = 0.5 }\n";
+  const std::string path = dir.write("roller.toml", scene);
+  {
+    const auto loaded = load_scene(path);
+    const System& s = loaded->system();
+    // The cut (the diameter): 4 edges across the central square and 2 x 2
+    // radially, 9 nodes, x only.
+    ASSERT_EQ(s.prescribed().size(), 9u);
+    for (const auto& p : s.prescribed()) EXPECT_EQ(p.dof % 2, 0);
+  }
+  const Result r = emdae("run " + quote(path) + " -q --out " + quote(dir / "o"), dir.path());
+  ASSERT_EQ(r.code, 0) << r.output;
+  const nlohmann::json j = read_json(dir / "o/summary.json");
+  EXPECT_LE(j["energy_rel_error_max"].get<double>(), 1e-10) << j;
+  EXPECT_LE(j["energy_balance_rel_error_max"].get<double>(), 1e-10) << j;
+  EXPECT_LE(j["linear_momentum_balance_error_max"].get<double>(), 1e-12) << j;
+  EXPECT_LE(j["angular_momentum_balance_rel_error_max"].get<double>(), 1e-8) << j;
+  EXPECT_TRUE(j["linear_momentum_error_max"].is_null());  // not conserved: judged by balance
+}
+
 TEST(SceneFe, GravityWeighsFreeBodyNodes) {
   TempDir dir;
   const std::string plate =
@@ -579,6 +656,29 @@ TEST(ExamplesFe, EveryExampleSceneLoadsWithoutWarnings) {
   EXPECT_GE(scenes, 10);  // among them patch_test and hertz
   EXPECT_TRUE(fs::exists(example("patch_test")));
   EXPECT_TRUE(fs::exists(example("hertz")));
+}
+
+// model = "linear" builds the small-strain elements: strain invariants (a
+// translation changes none, a rotation does), no rotational symmetry, and
+// the system is not said to conserve angular momentum.
+TEST(ExamplesFe, BarImpactLinearHasTheLinearMaterial) {
+  const auto scene = load_scene(example("bar_impact_linear"));
+  const System& s = scene->system();
+  ASSERT_EQ(scene->model->bodies().size(), 2u);
+  int elements = 0;
+  for (const auto& term : s.potentials()) {
+    const auto* e = dynamic_cast<const Q1Element*>(term.get());
+    ASSERT_NE(e, nullptr);
+    EXPECT_EQ(e->material().model, MaterialModel::Linear);
+    EXPECT_TRUE(e->quadratic_in_invariants());
+    ++elements;
+  }
+  EXPECT_EQ(elements, 2 * 40 * 2);
+  EXPECT_TRUE(s.symmetry().translation);
+  EXPECT_FALSE(s.symmetry().rotation);
+  const Conservation c = conservation_of(s);
+  EXPECT_TRUE(c.linear);
+  EXPECT_EQ(c.angular_reason, "not conserved: the system has linear elastic Q1 element terms");
 }
 
 TEST(ExamplesFe, HertzIsTheTestsMediumMesh) {

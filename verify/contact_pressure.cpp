@@ -48,6 +48,8 @@ std::vector<PairPressure> pair_pressures(const std::vector<std::string>& pairs,
       if (n.pair != name) continue;
       ++p.active_nodes;
       p.normal_force += n.force;
+      p.resultant_x += n.resultant_x;
+      p.resultant_y += n.resultant_y;
       sum += n.pressure;
       p.pressure_min = p.pressure_min ? std::min(*p.pressure_min, n.pressure) : n.pressure;
       p.pressure_max = p.pressure_max ? std::max(*p.pressure_max, n.pressure) : n.pressure;

@@ -9,10 +9,14 @@
 // pair: the contact's name; node: the slave node's index in its body's mesh
 // (also its point index within that body in the VTU fields); x, y: its
 // current position; gap: Phi_A, its normalized weighted gap; pressure: p_A =
-// -lambda_A / w_A (positive: compressive); weight: w_A = int N_A dGamma in
-// the reference configuration; force: p_A w_A = -lambda_A, the node's share
-// of the normal force. Rows by pair (in the scene's order), then along the
-// slave surface.
+// -lambda_A / W_A, W_A its mortar weight in the reference configuration:
+// the contact pressure as a force per current length (positive:
+// compressive), the nodal value of p = sum N_A p_A, whose work against the
+// current surface's shape functions gives the contact's nodal forces
+// (contact/mortar_contact.hpp); weight: w_A = int N_A dgamma over the node's
+// mortar segments in the current configuration; force: f_A = p_A w_A, the
+// node's share of the normal force. Rows by pair (in the scene's order), then
+// along the slave surface.
 #pragma once
 
 #include <optional>
@@ -26,6 +30,9 @@ struct ContactNode {
   std::string pair;
   int node = 0;
   double x = 0.0, y = 0.0, gap = 0.0, pressure = 0.0, weight = 0.0, force = 0.0;
+  // -p_A int N_A n dgamma, the force on the slave through this node (not in
+  // contact.csv; summed into PairPressure::resultant).
+  double resultant_x = 0.0, resultant_y = 0.0;
 };
 
 /// The figures of one contact pair; the pressure figures are empty without
@@ -33,7 +40,10 @@ struct ContactNode {
 struct PairPressure {
   std::string pair;
   int active_nodes = 0;
-  double normal_force = 0.0;  // sum of p_A w_A
+  double normal_force = 0.0;  // sum of f_A = p_A w_A (current weights)
+  // The resultant contact force on the slave body, sum of -p_A int N_A n
+  // dgamma: normal_force times the mean of -n; equal to it for a flat contact.
+  double resultant_x = 0.0, resultant_y = 0.0;
   std::optional<double> pressure_min, pressure_max;
   std::optional<double> pressure_mean;    // over the active nodes
   std::optional<double> pressure_spread;  // (max - min) / |mean|

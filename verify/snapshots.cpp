@@ -16,9 +16,7 @@ namespace {
 double equivalent_stress(const Q1Element& element, const Vec& q_local) {
   Eigen::Matrix2d sigma = Eigen::Matrix2d::Zero();
   for (int gp = 0; gp < Q1Element::kGaussPoints; ++gp) {
-    const Eigen::Matrix2d f = element.deformation_gradient(q_local, gp);
-    const Eigen::Matrix2d s = element.second_piola_kirchhoff(q_local, gp);
-    sigma += f * s * f.transpose() / f.determinant();
+    sigma += element.cauchy_stress(q_local, gp);
   }
   sigma /= Q1Element::kGaussPoints;
   const double a = sigma(0, 0), b = sigma(1, 1), c = sigma(0, 1);

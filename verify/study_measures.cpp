@@ -8,6 +8,7 @@
 #include <cmath>
 #include <limits>
 
+#include "core/fe_element.hpp"
 #include "core/gradient.hpp"
 
 namespace emdae {
@@ -181,8 +182,11 @@ double internal_potential(const System& system, const Vec& q, double t) {
   double v = 0.0;
   Vec local;
   for (const auto& term : system.potentials()) {
+    // Elastic elements are translation-invariant; the linear material's are
+    // not rotation-invariant, and their energy is deformation all the same.
     const Symmetry s = term->symmetry();
-    if (!s.translation || !s.rotation) continue;
+    const bool element = dynamic_cast<const Q1Element*>(term.get()) != nullptr;
+    if (!s.translation || (!s.rotation && !element)) continue;
     gather(*term, q, local);
     v += term->value(local, t);
   }

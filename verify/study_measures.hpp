@@ -134,7 +134,8 @@ struct RunMeasures {
 };
 
 /// V_int: the sum of the potential terms with translation and rotation
-/// symmetry (Term::symmetry()), the energy of deformation.
+/// symmetry (Term::symmetry()), and of the Q1 elements (the linear
+/// material's lack rotation symmetry): the energy of deformation.
 double internal_potential(const System& system, const Vec& q, double t);
 
 /// The final-state figures of `state` (at t_end) into `m`.

@@ -46,13 +46,15 @@ std::string statics_text(const StaticsOutcome& st) {
                      st.steps, st.newton_iterations, st.active_contacts, moments);
 }
 
-// "12 active nodes, normal force 4.75, pressure 0.1 .. 28 (mean 14, spread 2.0)"
+// "12 active nodes, normal force 4.75 (resultant 1e-9, 4.75), pressure 0.1 .. 28
+// (mean 14, spread 2.0)"
 std::string pressure_text(const PairPressure& p) {
   if (p.active_nodes == 0) return "no active node";
   return fmt::format(
-      "{} active nodes, normal force {:.6g}, pressure {:.6g} .. {:.6g} (mean {:.6g}, "
-      "spread {})",
-      p.active_nodes, p.normal_force, *p.pressure_min, *p.pressure_max, *p.pressure_mean,
+      "{} active nodes, normal force {:.6g} (resultant {:.6g}, {:.6g}), pressure {:.6g} .. {:.6g} "
+      "(mean {:.6g}, spread {})",
+      p.active_nodes, p.normal_force, p.resultant_x, p.resultant_y, *p.pressure_min,
+      *p.pressure_max, *p.pressure_mean,
       p.pressure_spread ? fmt::format("{:.3e}", *p.pressure_spread) : "-");
 }
 
@@ -198,6 +200,7 @@ nlohmann::ordered_json pressure_json(const std::vector<PairPressure>& pairs) {
   for (const auto& p : pairs)
     out[p.pair] = {{"active_nodes", p.active_nodes},
                    {"normal_force", p.normal_force},
+                   {"resultant", {p.resultant_x, p.resultant_y}},
                    {"pressure_min", optional_number(p.pressure_min)},
                    {"pressure_max", optional_number(p.pressure_max)},
                    {"pressure_mean", optional_number(p.pressure_mean)},

@@ -60,7 +60,7 @@ ElementStress element_stress(const Q1Element& element, const Vec& q_local) {
     const Eigen::Matrix2d s = element.second_piola_kirchhoff(q_local, gp);
     const double j = f.determinant();
     r.s += s;
-    r.sigma += f * s * f.transpose() / j;
+    r.sigma += element.cauchy_stress(q_local, gp);
     r.det_f += j;
   }
   r.s /= Q1Element::kGaussPoints;

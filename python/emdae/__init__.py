@@ -39,6 +39,7 @@ from ._emdae import (  # noqa: F401  (the module's names)
     TimeFunction,
     TimeSettings,
     Tolerances,
+    disk_mesh,
     known_schemes,
     material,
     read_gmsh,
@@ -48,7 +49,7 @@ from ._emdae import (  # noqa: F401  (the module's names)
 
 __all__ = [
     "load", "load_text", "run", "compare", "study", "Scene", "Model", "Result",
-    "RunSettings", "TimeFunction", "ring_mesh", "rectangle_mesh", "read_gmsh",
+    "RunSettings", "TimeFunction", "ring_mesh", "rectangle_mesh", "disk_mesh", "read_gmsh",
     "material", "known_schemes", "Error", "SceneError", "ModelError", "InputError",
     "OutputError", "Mesh", "Material", "TimeSettings", "NewtonSettings", "ContactSettings",
     "IdaSettings", "GeneralizedAlphaSettings", "SchemeSettings", "OutputSettings", "Tolerances",

@@ -87,6 +87,20 @@ def test_loads_dirichlet_and_time_functions():
     assert result.positions("beam")[-1, :, 1].min() < -1e-3  # it bends down
 
 
+def test_half_disk_mesh_has_its_cut_and_arc():
+    # The right half (quadrants -1 and 0): 2 x (2^2 + 4 x 3) elements, the
+    # arc at radius 2, the cut on x = 1 exactly, the centre node at the centre.
+    mesh = emdae.disk_mesh([1.0, -1.0], 2.0, 4, 3, first_quadrant=-1, quadrants=2)
+    assert mesh.n_elements == 2 * (4 + 4 * 3)
+    assert set(mesh.node_sets) == {"centre", "left", "outer"}
+    nodes = mesh.nodes
+    assert nodes[:, 0].min() == 1.0
+    radii = np.hypot(nodes[:, 0] - 1.0, nodes[:, 1] + 1.0)
+    assert abs(radii.max() - 2.0) < 1e-14
+    full = emdae.disk_mesh([0.0, 0.0], 1.0, 4, 3)
+    assert full.n_elements == 4 * (4 + 4 * 3) and "left" not in full.node_sets
+
+
 def test_modified_mass_contact_built_in_python_equals_the_scene_key():
     model, settings = two_rings(6.5, modified_mass=True)
     built = emdae.run(model, settings)
@@ -137,3 +151,31 @@ def test_static_patch_test_built_in_python_equals_its_scene():
     settings.statics.enabled = False
     with pytest.raises(emdae.InputError, match="statics.enabled"):
         emdae.run(model, settings)
+
+
+def test_linear_material_built_in_python_equals_its_scene():
+    # The small-strain material by name: the patch test in it equals the
+    # scene with model = "linear", and its pressure is still uniform.
+    model = emdae.Model(2)
+    linear = emdae.material("linear", 100.0, 0.3, 1.0)
+    model.add_body("lower", emdae.rectangle_mesh([0.0, 0.0], 2.0, 1.0, 5, 3), linear)
+    model.add_body("upper", emdae.rectangle_mesh([0.0, 1.0], 2.0, 1.0, 7, 3), linear)
+    model.add_contact("upper.bottom", "lower.top", name="interface")
+    model.fix("lower.bottom", components="y")
+    model.prescribe_displacement("upper.top", [0.0, -0.02],
+                                 emdae.TimeFunction.ramp(0.0, 1.0, 1.0), components="y")
+    settings = emdae.RunSettings()
+    settings.static_only = True
+    settings.statics.enabled = True
+    settings.statics.settings.load_time = 1.0
+    settings.statics.settings.newton.tolerance = 1e-12
+
+    built = emdae.run(model, settings)
+    overrides = {f"bodies[{i}].material.model": "linear" for i in (0, 1)}
+    scene = emdae.run(emdae.load(EXAMPLES / "patch_test.toml", overrides))
+    assert built.end == "finished"
+    assert np.array_equal(built.history_table, scene.history_table)
+    p = built.contact["pressure"]
+    assert p.size > 0 and (p.max() - p.min()) / abs(p.mean()) < 1e-8
+    with pytest.raises(emdae.ModelError):
+        emdae.material("linar", 100.0, 0.3, 1.0)
