@@ -398,10 +398,13 @@ bool IdaStepper::Impl::continues(const State& st) const {
 // dt with its moment int x x (f + R) dt (R = M v' + grad V + G^T lambda - f
 // on the prescribed rows: the support reaction).
 bool IdaStepper::Impl::has_quadrature() const {
-  return !s.loads().empty() || !s.prescribed().empty();
+  return !s.loads().empty() || !s.prescribed().empty() ||
+         std::any_of(s.constraints().begin(), s.constraints().end(),
+                     [](const auto& c) { return c->depends_on_time(); });
 }
 
-void IdaStepper::Impl::quadrature_point(double t, double& power, Vec& impulse, Vec& angular) {
+void IdaStepper::Impl::quadrature_point(double t, double& power, double& drive, Vec& impulse,
+                                        Vec& angular) {
   check_ida(IDAGetDky(mem.get(), t, 0, yq.get()), "IDAGetDky");
   check_ida(IDAGetDky(mem.get(), t, 1, ypq.get()), "IDAGetDky");
   const auto y = view(yq.get());
@@ -409,6 +412,9 @@ void IdaStepper::Impl::quadrature_point(double t, double& power, Vec& impulse, V
   Vec density = Vec::Zero(n);
   if (!s.loads().empty()) s.add_load_forces(x, t, density);
   power = density.dot(u);
+  // The driven constraints' power lambda . dPhi/dt (the system's own
+  // constraints come first among the multipliers).
+  drive = driven_constraint_power(s, x, y.segment(2 * n, s.n_constraints()), t);
   if (!s.prescribed().empty()) {
     rq.resize(size);
     residual(t, y, view(ypq.get()), Eigen::Map<Vec>(rq.data(), size), false);
@@ -419,12 +425,13 @@ void IdaStepper::Impl::quadrature_point(double t, double& power, Vec& impulse, V
 
 void IdaStepper::Impl::integrate_loads(double a, double b, StepStats& stats) {
   if (!has_quadrature() || !(b > a)) return;
-  double p[3];
+  double p[3], d[3];
   Vec imp[3], ang[3];
   const double ts[3] = {a, 0.5 * (a + b), b};
-  for (int k = 0; k < 3; ++k) quadrature_point(ts[k], p[k], imp[k], ang[k]);
+  for (int k = 0; k < 3; ++k) quadrature_point(ts[k], p[k], d[k], imp[k], ang[k]);
   const double w = (b - a) / 6;
   stats.external_work += w * (p[0] + 4 * p[1] + p[2]);
+  stats.constraint_work += w * (d[0] + 4 * d[1] + d[2]);
   stats.external_impulse += w * (imp[0] + 4 * imp[1] + imp[2]);
   stats.external_angular_impulse += w * (ang[0] + 4 * ang[1] + ang[2]);
 }

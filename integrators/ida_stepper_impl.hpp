@@ -161,7 +161,7 @@ struct IdaStepper::Impl {
               double interval);
   bool continues(const State& st) const;
   bool has_quadrature() const;
-  void quadrature_point(double t, double& power, Vec& impulse, Vec& angular);
+  void quadrature_point(double t, double& power, double& drive, Vec& impulse, Vec& angular);
   void integrate_loads(double a, double b, StepStats& stats);
   int handle_root(double interval);
 };

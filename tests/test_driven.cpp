@@ -16,6 +16,10 @@
 //    1e-14 as the independent reference. IDA at 1e-12 matches it (and
 //    successive tolerances approach each other), em, midpoint and
 //    generalized-alpha converge to it with order 2 from three step sizes;
+//  - the work of the driven constraints, int lambda . dPhi/dt dt
+//    (StepStats::constraint_work), against H(T) - H(0) of both references:
+//    em's equals its own energy change to round-off, every scheme's
+//    converges with order 2, IDA's at 1e-12 is within 1e-9;
 //  - a user term with only some of the time derivatives is refused, and one
 //    without any falls back to differences (same motion, looser).
 #include <gsl/gsl_errno.h>
@@ -28,10 +32,14 @@
 #include <string>
 #include <vector>
 
+#include "core/particles.hpp"
+#include "core/quantities.hpp"
 #include "core/system.hpp"
 #include "core/user_term.hpp"
 #include "integrators/ida_stepper.hpp"
 #include "integrators/schemes.hpp"
+#include "run/run.hpp"
+#include "scene/scene.hpp"
 
 namespace emdae {
 namespace {
@@ -311,6 +319,206 @@ TEST(DrivenSupport, EmMidpointAndGeneralizedAlphaConvergeWithOrderTwo) {
       std::printf("moving support %s: error %.3e -> %.3e, order %.3f\n", scheme, errors[i - 1],
                   errors[i], rate);
       EXPECT_NEAR(rate, 2.0, 0.2) << scheme;
+    }
+  }
+}
+
+// --- the work of the driven constraints ----------------------------------------
+// The only force that is not conservative is the driven constraint's, so its
+// work int lambda . dPhi/dt dt (StepStats::constraint_work) is the change of
+// energy H(T) - H(0). em reports exactly the constraint's part of its energy
+// balance, so there the two agree to round-off at every step size; against
+// the reference's H(T) - H(0) every scheme's work converges with order 2,
+// and IDA at 1e-12 (Simpson's rule on its steps) is within 1e-9 of it.
+
+double energy(const System& s, const State& st) {
+  return measure(s, st.q, st.v, st.t).total();
+}
+
+struct WorkRun {
+  double work = 0.0;    // sum of StepStats::constraint_work
+  double energy = 0.0;  // H(T) - H(0) of the run
+};
+
+WorkRun run_work(const System& s, Stepper& stepper, double t_end, int n) {
+  State st = initial_state(s);
+  const double h0 = energy(s, st);
+  WorkRun w;
+  for (int i = 0; i < n; ++i) {
+    const StepStats r = stepper.step(st, t_end / n);
+    if (!r.converged) throw std::runtime_error("step failed at t = " + std::to_string(st.t));
+    w.work += r.constraint_work;
+  }
+  w.energy = energy(s, st) - h0;
+  return w;
+}
+
+TEST(DrivenWork, TheSupportsWorkIsTheEnergyChange) {
+  const double t_end = 3.0;
+  const Eigen::Vector4d ref = swing_reference(t_end);
+  // H = |v|^2 / 2 + g y for the unit mass; it starts at rest at y = -L.
+  const double exact = 0.5 * ref.tail<2>().squaredNorm() + kG * ref[1] - kG * (-kLength);
+  std::printf("moving support: work of the support over [0, %g] = %.12f (rk8pd)\n", t_end, exact);
+  for (const char* scheme : {"em", "midpoint", "galpha"}) {
+    std::vector<double> errors;
+    for (int n : {150, 300, 600}) {
+      auto s = swinging();
+      NewtonSettings newton;
+      newton.tolerance = 1e-12;
+      auto stepper = make_stepper(scheme, *s, SchemeSettings(newton));
+      const WorkRun w = run_work(*s, *stepper, t_end, n);
+      errors.push_back(std::abs(w.work - exact));
+      const double balance = std::abs(w.energy - w.work);
+      std::printf("moving support %s n = %d: work %.12f, |H(T) - H(0) - W| = %.3e\n", scheme, n,
+                  w.work, balance);
+      // em: the work is the constraint's part of the energy identity.
+      if (std::string(scheme) == "em") {
+        EXPECT_LE(balance, 1e-11) << "n = " << n;
+      }
+    }
+    for (std::size_t i = 1; i < errors.size(); ++i) {
+      const double rate = std::log2(errors[i - 1] / errors[i]);
+      std::printf("moving support %s: work error %.3e -> %.3e, order %.3f\n", scheme, errors[i - 1],
+                  errors[i], rate);
+      EXPECT_NEAR(rate, 2.0, 0.25) << scheme;
+    }
+  }
+  auto s = swinging();
+  IdaStepper ida(*s, IdaSettings{1e-12, 1e-12});
+  const WorkRun w = run_work(*s, ida, t_end, 30);
+  std::printf("moving support ida 1e-12: work %.12f, error %.3e, |H(T) - H(0) - W| = %.3e\n",
+              w.work, std::abs(w.work - exact), std::abs(w.energy - w.work));
+  EXPECT_LE(std::abs(w.work - exact), 1e-9);
+}
+
+TEST(DrivenWork, TheCranksWorkIsTheSlidersKineticEnergy) {
+  // The crank pin turns uniformly, so H(T) - H(0) is the slider's kinetic
+  // energy change m_B (v_B(T)^2 - v_B(0)^2) / 2.
+  const double t_end = 2.0;
+  const double exact =
+      0.5 * kMassB * (std::pow(crank_exact(t_end).vb, 2) - std::pow(crank_exact(0.0).vb, 2));
+  std::vector<double> errors;
+  for (int n : {40, 80, 160}) {
+    auto s = slider_crank();
+    NewtonSettings newton;
+    newton.tolerance = 1e-12;
+    auto stepper = make_stepper("em", *s, SchemeSettings(newton));
+    const WorkRun w = run_work(*s, *stepper, t_end, n);
+    EXPECT_LE(std::abs(w.energy - w.work), 1e-11) << "n = " << n;
+    errors.push_back(std::abs(w.work - exact));
+  }
+  for (std::size_t i = 1; i < errors.size(); ++i) {
+    const double rate = std::log2(errors[i - 1] / errors[i]);
+    std::printf("slider-crank em: work error %.3e -> %.3e, order %.3f (exact %.12f)\n",
+                errors[i - 1], errors[i], rate, exact);
+    EXPECT_NEAR(rate, 2.0, 0.15);
+  }
+  auto s = slider_crank();
+  IdaStepper ida(*s, IdaSettings{1e-12, 1e-12});
+  const WorkRun w = run_work(*s, ida, t_end, 20);
+  std::printf("slider-crank ida 1e-12: work error %.3e\n", std::abs(w.work - exact));
+  EXPECT_LE(std::abs(w.work - exact), 1e-9);
+}
+
+// --- a driven anchor in a scene -------------------------------------------------
+// examples/driven_pendulum.toml: a periodic spline path of the support.
+
+std::string driven_pendulum() {
+  return std::string(EMDAE_EXAMPLES_DIR) + "/driven_pendulum.toml";
+}
+
+TEST(DrivenScene, ThePathsTimeDerivativesAreTheSplines) {
+  const auto scene = load_scene(driven_pendulum());
+  const System& s = scene->system();
+  ASSERT_EQ(s.n_constraints(), 1);
+  const Term& c = *s.constraints()[0];
+  ASSERT_TRUE(c.depends_on_time());
+  ASSERT_TRUE(c.has_time_derivatives());
+  const Vec q = Eigen::Vector2d(0.3, -0.9);
+  // Against central differences of Phi in t (errors ~1e-10 and ~1e-7 here),
+  // across sample times and the period's wrap at t = 2.
+  for (double t : {0.3, 0.25, 1.1, 1.999, 2.0, 2.7, 3.9}) {
+    const double h = 1e-5, h2 = 1e-3;
+    const double dt = (c.value(q, t + h) - c.value(q, t - h)) / (2 * h);
+    const double dtt = (c.value(q, t + h2) - 2 * c.value(q, t) + c.value(q, t - h2)) / (h2 * h2);
+    EXPECT_NEAR(c.value_t(q, t), dt, 1e-9) << "t = " << t;
+    // (Phi''' jumps at a sample time: there the second difference is only
+    // first order, so it is compared away from them.)
+    const double from_knot = std::abs(4 * t - std::round(4 * t)) / 4;
+    if (from_knot > 2 * h2) {
+      EXPECT_NEAR(c.value_tt(q, t), dtt, 1e-5) << "t = " << t;
+    }
+    Vec g, gp, gm;
+    c.gradient_t(q, t, g);
+    // d/dt grad Phi = grad (dPhi/dt), and dPhi/dt is linear in q: a forward
+    // difference in q is exact up to round-off.
+    const Vec qx = q + Eigen::Vector2d(1e-3, 0.0), qy = q + Eigen::Vector2d(0.0, 1e-3);
+    EXPECT_NEAR(g[0], (c.value_t(qx, t) - c.value_t(q, t)) / 1e-3, 1e-9) << "t = " << t;
+    EXPECT_NEAR(g[1], (c.value_t(qy, t) - c.value_t(q, t)) / 1e-3, 1e-9) << "t = " << t;
+    // The table repeats with period 2.
+    EXPECT_NEAR(c.value(q, t), c.value(q, t + 2.0), 1e-14) << "t = " << t;
+  }
+  // The table samples 0.2 sin(pi t): the spline follows it to its
+  // interpolation error (h = 0.25: about 1e-4), Phi's rate likewise.
+  const double pi = 3.141592653589793;
+  for (double t : {0.1, 0.6, 1.3}) {
+    const double xs = 0.2 * std::sin(pi * t), vs = 0.2 * pi * std::cos(pi * t);
+    EXPECT_NEAR(c.value(q, t), ((q[0] - xs) * (q[0] - xs) + q[1] * q[1] - 1.0) / 2, 2e-4);
+    EXPECT_NEAR(c.value_t(q, t), -(q[0] - xs) * vs, 2e-3);
+  }
+}
+
+TEST(DrivenScene, AnchorPathLinearHoldsItsEnds) {
+  const AnchorPath path(Eigen::Vector2d(1.0, 2.0), {0.0, 1.0, 3.0},
+                        {{0.0, 0.5, 0.5}, {0.0, 0.0, -1.0}}, AnchorPath::Interpolation::Linear);
+  EXPECT_TRUE(path.position(0.5).isApprox(Eigen::Vector2d(1.25, 2.0)));
+  EXPECT_TRUE(path.velocity(0.5).isApprox(Eigen::Vector2d(0.5, 0.0)));
+  EXPECT_TRUE(path.velocity(2.0).isApprox(Eigen::Vector2d(0.0, -0.5)));
+  EXPECT_EQ(path.acceleration(2.0).norm(), 0.0);
+  // Beyond the table: held, at rest.
+  EXPECT_TRUE(path.position(10.0).isApprox(Eigen::Vector2d(1.5, 1.0)));
+  EXPECT_EQ(path.velocity(10.0).norm(), 0.0);
+  EXPECT_TRUE(path.position(-1.0).isApprox(Eigen::Vector2d(1.0, 2.0)));
+  EXPECT_THROW(AnchorPath(Eigen::Vector2d(0, 0), {0.0, 1.0}, {{0.0, 1.0}, {0.0, 1.0}},
+                          AnchorPath::Interpolation::Cubic),
+               std::invalid_argument);  // a cubic spline needs 3 points
+  EXPECT_THROW(AnchorPath(Eigen::Vector2d(0, 0), {0.0, 1.0, 2.0}, {{0.0, 1.0, 2.0}, {0, 0, 0}},
+                          AnchorPath::Interpolation::Periodic),
+               std::invalid_argument);  // does not close
+}
+
+TEST(DrivenScene, TheSummaryBalancesTheSupportsWork) {
+  // em and midpoint (the potential is linear, the constraint quadratic: both
+  // satisfy their energy identity exactly) balance H - H_0 = W to
+  // round-off; IDA at 1e-10 to its quadrature's accuracy (5e-10).
+  for (const std::string scheme : {"em", "midpoint", "ida"}) {
+    auto scene =
+        load_scene(driven_pendulum(),
+                   std::vector<std::string>{"time.t_end=2", "scheme.name=" + scheme,
+                                            "scheme.ida.rtol=1e-10", "scheme.ida.atol=1e-10"});
+    const RunResult r = run(*scene->model, scene->settings);
+    ASSERT_TRUE(r.finished()) << scheme << ": " << r.summary.status;
+    const Summary& s = r.summary;
+    const System& sys = scene->system();
+    const double h0 = measure(sys, sys.initial_positions(), sys.initial_velocities(), 0.0).total();
+    const double h1 = measure(sys, r.state.q, r.state.v, r.state.t).total();
+    ASSERT_TRUE(s.constraint_work.has_value()) << scheme;
+    ASSERT_TRUE(s.energy_balance_rel_error_max.has_value()) << scheme;
+    std::printf("driven_pendulum %s: H(2) - H(0) = %.12f, constraint_work %.12f, balance %.3e\n",
+                scheme.c_str(), h1 - h0, *s.constraint_work, *s.energy_balance_rel_error_max);
+    EXPECT_GT(std::abs(h1 - h0), 1e-2) << scheme;  // the support does work
+    const double limit = scheme == "ida" ? 1e-8 : 1e-13;
+    EXPECT_LE(*s.energy_balance_rel_error_max, limit) << scheme;
+    EXPECT_NEAR(*s.constraint_work, h1 - h0, limit * std::abs(h0)) << scheme;
+    EXPECT_NE(s.energy_note.find("not conserved"), std::string::npos) << s.energy_note;
+    for (const Check& c : s.checks) {
+      if (c.name == "energy_rel") {
+        EXPECT_EQ(c.result, "skipped");
+        EXPECT_NE(c.note.find("does work"), std::string::npos) << c.note;
+      }
+      if (c.name == "energy_balance_rel" && scheme != "ida") {
+        EXPECT_EQ(c.result, "pass");
+      }
     }
   }
 }
