@@ -49,6 +49,10 @@ void check_ls(int flag, const char* call) {
   check(flag, call, IDAGetLinReturnFlagName);
 }
 
+// The smallest absolute tolerance of the multipliers in IDA's Newton
+// convergence test (allocate()).
+constexpr double kMultiplierAtol = 1e-10;
+
 // Central differences in t for the second derivative (start values only):
 // step 1e-4, truncation and round-off errors both ~1e-8.
 double time_step_second(double t) {
@@ -359,7 +363,19 @@ int IdaStepper::Impl::restart(double t, const Vec& q0, const Vec& v0,
     void* p = mem.get();
     check_ida(IDASetErrHandlerFn(p, &Impl::error_cb, this), "IDASetErrHandlerFn");
     check_ida(IDAInit(p, &Impl::residual_cb, t, yy.get(), yp.get()), "IDAInit");
-    check_ida(IDASStolerances(p, set.rtol, set.atol), "IDASStolerances");
+    // The multipliers lambda, mu have no error test (IDASetSuppressAlg), but
+    // their weights still enter the Newton convergence test. In the index-2
+    // form they respond to the residual's round-off like 1/h, so with
+    // atol far below 1e-10 that test can fail on noise alone: IDA then cuts
+    // h, which makes the noise larger (a driven pendulum started with a
+    // non-zero dPhi/dt: 50 000 convergence failures down to h = 4e-22 at
+    // atol = 1e-12). Their absolute tolerance is held at kMultiplierAtol or
+    // above; q and v keep atol.
+    atolv = sundials::make_vector(size, ctx.get());
+    auto a = view(atolv.get());
+    a.setConstant(set.atol);
+    a.tail(2 * m).setConstant(std::max(set.atol, kMultiplierAtol));
+    check_ida(IDASVtolerances(p, set.rtol, atolv.get()), "IDASVtolerances");
     check_ida(IDASetUserData(p, this), "IDASetUserData");
     check_ida(IDASetId(p, id.get()), "IDASetId");
     check_ida(IDASetSuppressAlg(p, SUNTRUE), "IDASetSuppressAlg");

@@ -70,6 +70,7 @@ struct IdaStepper::Impl {
   // the context last.
   sundials::Context ctx;
   sundials::Vector yy, yp, id, yq, ypq;
+  sundials::Vector atolv;  // absolute tolerances (the multipliers' held up)
   sundials::Matrix jmat;
   std::unique_ptr<KluSolver> klu;
   sundials::Memory<IDAFree> mem;
