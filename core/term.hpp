@@ -97,6 +97,23 @@ class Term {
   }
   /// True when f depends on time explicitly (driven constraints, loads).
   virtual bool depends_on_time() const { return false; }
+
+  // --- explicit time derivatives (driven constraints) -----------------------
+  // For a term with depends_on_time(), the partial derivatives of f~_b in t
+  // at fixed pi: IDA's velocity constraint G v + Phi_t = 0 and its consistent
+  // start (which also needs G_t = d/dt grad Phi and Phi_tt) and the
+  // generalized-alpha velocity constraint use them. A term that does not
+  // supply them returns false here, and value_t(), gradient_t() and
+  // value_tt() below fall back to central differences of f in t (errors
+  // ~1e-10 and ~1e-8: enough for IDA at tolerances down to about 1e-9, not
+  // below).
+  virtual bool has_time_derivatives() const { return false; }
+  /// d f~_b / dt at fixed pi (called only when has_time_derivatives()).
+  virtual double block_value_t(int block, const VecRef& pi, double t) const;
+  /// grad_pi (d f~_b / dt), length block_size().
+  virtual void block_gradient_t(int block, const VecRef& pi, double t, Eigen::Ref<Vec> g) const;
+  /// d2 f~_b / dt2 at fixed pi.
+  virtual double block_value_tt(int block, const VecRef& pi, double t) const;
   virtual Symmetry symmetry() const { return {}; }
   /// Per axis (dim of them): whether a translation along that axis alone
   /// leaves the term unchanged, so that it cannot change that component of
@@ -110,6 +127,15 @@ class Term {
 
   /// f(q) at time t.
   double value(const Vec& q, double t) const;
+  /// df/dt (q, t) at fixed q: analytic when has_time_derivatives(), else a
+  /// central difference with step 1e-5 max(1, |t|).
+  double value_t(const Vec& q, double t) const;
+  /// grad_q (df/dt) (q, t), length n_local(): Dpi(q)^T grad_pi f~_t when
+  /// analytic, else a central difference of the exact gradient.
+  void gradient_t(const Vec& q, double t, Vec& g) const;
+  /// d2f/dt2 (q, t): analytic, or a central second difference with step
+  /// 1e-4 max(1, |t|).
+  double value_tt(const Vec& q, double t) const;
 
  protected:
   void set_n_invariants(int n) { n_invariants_ = n; }

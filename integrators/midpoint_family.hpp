@@ -69,6 +69,8 @@ class MidpointFamilyStepper : public Stepper, public SubstepScheme {
   void velocity_from_momentum_balance(const State& start, const Vec& q1, const Vec& force,
                                       const Vec& load, double dt, Vec& v1, double& work);
   std::vector<const Term*> active_terms(const std::vector<int>& active) const;
+  /// Work of the time-dependent constraints over the step (StepStats::constraint_work).
+  double driven_work(const Vec& q0, const Vec& q1, const Vec& lambda, double t0, double t1);
 
   const System& system_;
   GradientKind kind_;
@@ -83,6 +85,7 @@ class MidpointFamilyStepper : public Stepper, public SubstepScheme {
   std::vector<int> massless_;                        // free dofs without mass
   SparseMatrix m_fp_;                                // M restricted to free rows, all columns
   Eigen::SimplicialLDLT<SparseMatrix> m_ff_;         // factor of M on the free dofs
+  TermWorkspace work_ws_;                            // for driven_work
 };
 
 }  // namespace emdae

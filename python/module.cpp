@@ -18,9 +18,11 @@
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
+#include <algorithm>
 #include <cmath>
 #include <exception>
 #include <memory>
+#include <optional>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -529,6 +531,31 @@ void bind_model(py::module_& m) {
       .def("add_link", &Model::add_link, py::arg("a"), py::arg("b"), py::arg("length") = 0.0)
       .def("add_anchor", &Model::add_anchor, py::arg("particle"), py::arg("point"),
            py::arg("length") = 0.0)
+      .def(
+          "add_moving_anchor",
+          [](Model& x, const std::string& particle, const Vec& point, std::vector<double> times,
+             std::vector<std::vector<double>> displacements, const std::string& interpolation,
+             double length) {
+            const std::vector<std::string> kinds = {"linear", "cubic", "periodic"};
+            const auto it = std::find(kinds.begin(), kinds.end(), interpolation);
+            if (it == kinds.end())
+              throw ModelError("interpolation",
+                               "must be \"linear\", \"cubic\" or \"periodic\", received \"" +
+                                   interpolation + "\"");
+            std::optional<AnchorPath> path;
+            try {
+              path.emplace(point, std::move(times), std::move(displacements),
+                           static_cast<AnchorPath::Interpolation>(it - kinds.begin()));
+            } catch (const std::invalid_argument& e) {
+              throw ModelError("path", e.what());
+            }
+            x.add_moving_anchor(particle, *path, length);
+          },
+          py::arg("particle"), py::arg("point"), py::arg("times"), py::arg("displacements"),
+          py::arg("interpolation") = "cubic", py::arg("length") = 0.0,
+          "A rigid link to a point moving on point + u(t): u interpolated through "
+          "(times, displacements[axis]) by GSL, 'linear', 'cubic' or 'periodic' (the scene's "
+          "[[anchors]] path).")
       .def("add_anchors", &Model::add_anchors, py::arg("nodes"), py::arg("point"))
       .def("add_gravity", &Model::add_gravity, py::arg("acceleration"))
       .def(

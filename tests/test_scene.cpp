@@ -197,6 +197,46 @@ std::vector<Malformed> malformed_scenes() {
            "[[anchors]]\nparticle = \"a\"\npoint = [0.0, 1.0]\n",
        "particle = \"a\"",
        {"key 'anchors[0].particle'", "fixed", "received \"a\""}},
+      {"anchor_path_periodic_open",
+       kValid + "[[anchors]]\nparticle = \"a\"\npoint = [0.0, 1.0]\n" +
+           "path = { times = [0.0, 1.0, 2.0], x = [0.0, 0.1, 0.2], interpolation = \"periodic\" "
+           "}\n",
+       "path = {",
+       {"key 'anchors[0].path.x'", "equal first and last values", "received [0.0, 0.1, 0.2]"}},
+      {"anchor_path_interpolation_unknown",
+       kValid + "[[anchors]]\nparticle = \"a\"\npoint = [0.0, 1.0]\n" +
+           "path = { times = [0.0, 1.0, 2.0], y = [0.0, 0.1, 0.2], interpolation = \"spline\" }\n",
+       "path = {",
+       {"key 'anchors[0].path.interpolation'", "unknown interpolation", "received \"spline\""}},
+      {"anchor_path_short_values",
+       kValid + "[[anchors]]\nparticle = \"a\"\npoint = [0.0, 1.0]\n" +
+           "path = { times = [0.0, 1.0, 2.0], x = [0.0, 0.1] }\n",
+       "path = {",
+       {"key 'anchors[0].path.x'", "as many entries as times (3)"}},
+      {"anchor_path_times_not_increasing",
+       kValid + "[[anchors]]\nparticle = \"a\"\npoint = [0.0, 1.0]\n" +
+           "path = { times = [0.0, 1.0, 1.0], x = [0.0, 0.1, 0.2] }\n",
+       "path = {",
+       {"key 'anchors[0].path.times'", "increase strictly", "received [0.0, 1.0, 1.0]"}},
+      {"anchor_path_too_few_times",
+       kValid + "[[anchors]]\nparticle = \"a\"\npoint = [0.0, 1.0]\n" +
+           "path = { times = [0.0, 1.0], x = [0.0, 0.1] }\n",
+       "path = {",
+       {"key 'anchors[0].path.times'", "at least 3 times for cubic", "received [0.0, 1.0]"}},
+      {"anchor_path_not_a_table",
+       kValid + "[[anchors]]\nparticle = \"a\"\npoint = [0.0, 1.0]\npath = [0.0, 1.0]\n",
+       "path = [",
+       {"key 'anchors[0].path'", "must be a table", "received array [0.0, 1.0]"}},
+      {"anchor_path_z_in_2d",
+       kValid + "[[anchors]]\nparticle = \"a\"\npoint = [0.0, 1.0]\n" +
+           "path = { times = [0.0, 1.0, 2.0], z = [0.0, 0.1, 0.2] }\n",
+       "path = {",
+       {"key 'anchors[0].path.z'", "unknown key", "received [0.0, 0.1, 0.2]"}},
+      {"anchor_path_length_not_the_distance",
+       kValid + "[[anchors]]\nparticle = \"a\"\npoint = [0.0, 1.0]\nlength = 2.0\n" +
+           "path = { times = [0.0, 1.0, 2.0], x = [0.0, 0.1, 0.2] }\n",
+       "length = 2.0",
+       {"key 'anchors[0].length'", "received 2.0"}},
       {"all_fixed",
        kTime + "[[particles]]\nname = \"a\"\nposition = [0.0, 0.0]\nfixed = true\n",
        "[[particles]]",

@@ -110,6 +110,9 @@ Recorder::Recorder(const System& system, const State& initial, ExternalWork exte
       conservation_(conservation_of(system)),
       has_loads_(!system.loads().empty()),
       has_contact_(system.n_unilateral() > 0) {
+  for (const auto& c : system.constraints())
+    if (c->depends_on_time()) has_driven_ = true;
+  has_work_ = has_loads_ || has_driven_;
   initial_.step = 0;
   initial_.t = initial.t;
   initial_.quantities = measure(system, initial.q, initial.v, initial.t);
@@ -139,6 +142,7 @@ const Sample& Recorder::observe(const State& state, const AcceptedStep& step) {
   // their energy balance; a hook, when given, says it instead.
   s.external_work =
       external_work_ ? external_work_(state) : last_.external_work + step.stats.external_work;
+  s.constraint_work = last_.constraint_work + step.stats.constraint_work;
   s.contact_events = step.stats.contact_events;
   measure_contact(state, s);
   newton_iterations_ += s.newton_iterations;
@@ -179,8 +183,9 @@ void Recorder::measure_contact(const State& state, Sample& s) {
 }
 
 void Recorder::track_load_free(const Sample& previous, const Sample& s) {
-  if (!has_loads_) return;
-  if (!load_free_ || !load_free_(previous.t, s.t)) {
+  if (!has_work_) return;
+  // A driven constraint works at every step: no interval is free of it.
+  if (has_driven_ || !load_free_ || !load_free_(previous.t, s.t)) {
     in_free_ = false;
     return;
   }
@@ -220,21 +225,22 @@ void Recorder::track_balance(const AcceptedStep& step, const Sample& s) {
 void Recorder::update_maxima(Sample& s) {
   const Quantities& q0 = initial_.quantities;
   const Quantities& q = s.quantities;
-  // The energy balance: what the loads put in since t_0 is not an error.
-  const double work = s.external_work - initial_.external_work;
+  // The energy balance: what the loads and the driven constraints put in
+  // since t_0 is not an error.
+  const double work = s.external_work - initial_.external_work + s.constraint_work;
   const double drift = std::abs(q.total() - q0.total() - work);
   // With loads, a run may start from rest and unstressed (H_0 = 0): the
   // balance is then measured against the largest energy the run has held.
-  if (has_loads_)
+  if (has_work_)
     balance_scale_ = std::max(
         {balance_scale_, energy_scale_, q.kinetic + std::abs(q.potential), std::abs(work)});
-  const double scale = has_loads_ ? balance_scale_ : energy_scale_;
+  const double scale = has_work_ ? balance_scale_ : energy_scale_;
   s.energy_error = scale > 0 ? drift / scale : drift;
   s.linear_momentum_error = (q.linear_momentum - q0.linear_momentum).norm();
   const double dj = (q.angular_momentum - q0.angular_momentum).norm();
   s.angular_momentum_error = angular_scale_ > 0 ? dj / angular_scale_ : dj;
   keep_max(balance_error_max_, s.energy_error);
-  if (!has_loads_) energy_error_max_ = balance_error_max_;
+  if (!has_work_) energy_error_max_ = balance_error_max_;
   keep_max(linear_error_max_, s.linear_momentum_error);
   for (Eigen::Index d = 0; d < linear_axis_error_max_.size(); ++d)
     keep_max(linear_axis_error_max_[d], std::abs(q.linear_momentum[d] - q0.linear_momentum[d]));
@@ -244,12 +250,16 @@ void Recorder::update_maxima(Sample& s) {
 }
 
 double Recorder::energy_rel_error_max() const {
-  if (!has_loads_) return energy_error_max_;
+  if (!has_work_) return energy_error_max_;
   return free_intervals_ > 0 ? free_error_max_ : balance_error_max_;
 }
 
 std::string Recorder::energy_note() const {
-  if (!has_loads_) return "";
+  if (has_driven_)
+    return "not conserved: driven (time-dependent) constraints do work, int lambda . dPhi/dt "
+           "dt (constraint_work); this is the energy balance error |H - H_0 - W| with W the "
+           "work of loads and driven constraints (energy_balance_rel_error_max)";
+  if (!has_work_) return "";
   if (free_intervals_ == 0)
     return "no load-free interval: this is the energy balance error |H - H_0 - W| "
            "(energy_balance_rel_error_max)";
@@ -324,6 +334,7 @@ void put_sample(std::ostream& out, const Sample& s) {
   put(out, s.newton_iterations);
   put(out, s.cutbacks);
   put(out, s.external_work);
+  put(out, s.constraint_work);
   put(out, s.energy_error);
   put(out, s.linear_momentum_error);
   put(out, s.angular_momentum_error);
@@ -347,6 +358,7 @@ Sample get_sample(std::istream& in) {
   s.newton_iterations = get<int>(in);
   s.cutbacks = get<int>(in);
   s.external_work = get<double>(in);
+  s.constraint_work = get<double>(in);
   s.energy_error = get<double>(in);
   s.linear_momentum_error = get<double>(in);
   s.angular_momentum_error = get<double>(in);

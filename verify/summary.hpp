@@ -100,6 +100,9 @@ struct Summary {
   std::string energy_note;  // what energy_rel_error_max measures with loads
   std::optional<double> energy_balance_rel_error_max;  // with loads
   double external_work = 0.0;                          // W over the run
+  // With driven (time-dependent) constraints: their work over the run,
+  // int lambda . dPhi/dt dt, which the balance includes.
+  std::optional<double> constraint_work;
   std::optional<double> linear_momentum_error_max;
   std::string linear_momentum_note;
   // Per component, when the whole is not conserved but some component is
