@@ -53,6 +53,7 @@ struct CompareOptions {
   bool quiet = false;
   bool strict = false;  // a missed [tolerances] check exits 4 (otherwise 0)
   bool force = false;
+  int jobs = 0;  // schemes run at once, each on a thread; 0: the hardware threads
 };
 
 struct StudyOptions {
@@ -68,6 +69,10 @@ struct StudyOptions {
   std::string out_dir;                  // empty: out/<scene name>-study
   std::vector<std::string> overrides;
   bool quiet = false;
+  /// Runs at once, each on a thread of its own; 0: the hardware threads
+  /// (under mpirun: 1 per rank). The results are those of one run after the
+  /// other, whatever the number.
+  int jobs = 0;
 };
 
 int command_run(const RunOptions& options, std::ostream& out, std::ostream& err);

@@ -6,15 +6,40 @@
 #include <algorithm>
 #include <filesystem>
 #include <fstream>
+#include <numeric>
 #include <sstream>
 
 #include "cli/command_support.hpp"
+#include "cli/parallel.hpp"
+#include "cli/progress.hpp"
 #include "run/describe.hpp"
 #include "verify/report.hpp"
 
 namespace emdae {
 
 namespace fs = std::filesystem;
+
+namespace {
+
+// How a run ended, from its exit code (the line each shows when it ends).
+const char* ending(int code) {
+  switch (code) {
+    case kExitOk:
+      return "finished";
+    case kExitChecksFailed:
+      return "finished, a [tolerances] check failed";
+    case kExitRunFailed:
+      return "failed";
+    case kExitBadInput:
+      return "refused the scene";
+    case kExitInterrupted:
+      return "interrupted";
+    default:
+      return "internal error";
+  }
+}
+
+}  // namespace
 
 int command_compare(const CompareOptions& options, std::ostream& out, std::ostream& err) {
   // The scene and the scheme names are checked before anything is run or
@@ -38,36 +63,70 @@ int command_compare(const CompareOptions& options, std::ostream& out, std::ostre
     return bad_input(err, e.what());
   }
 
-  // Each scheme in turn, each into its own folder with its own report; one
-  // that fails or refuses the scene is recorded and the others still run.
-  std::vector<ComparedRun> runs;
-  int exit_code = kExitOk;
-  for (const auto& scheme : schemes) {
+  // Each scheme into its own folder with its own report, one after the
+  // other or --jobs at a time; one that fails or refuses the scene is
+  // recorded and the others still run. Whatever the order they end in, the
+  // runs are listed in the order of --schemes.
+  const int n = static_cast<int>(schemes.size());
+  const int jobs = options.jobs > 0 ? options.jobs : default_jobs();
+  constexpr int kNotRun = -1;
+  std::vector<int> codes(schemes.size(), kNotRun);
+  std::vector<RunRecord> records(schemes.size());
+  std::vector<int> cases(schemes.size());
+  std::iota(cases.begin(), cases.end(), 0);
+  CaseWork work;
+  work.err = &err;
+  work.run = [&](int i, std::ostream& case_err) {
+    const auto k = static_cast<std::size_t>(i);
     RunOptions run;
     run.scene_path = options.scene_path;
-    run.scheme = scheme;
+    run.scheme = schemes[k];
     run.dt = options.dt;
     run.t_end = options.t_end;
     run.overrides = options.overrides;
-    run.out_dir = (fs::path(dir) / scheme).string();
-    run.quiet = options.quiet;
+    run.out_dir = (fs::path(dir) / schemes[k]).string();
+    // More than one at a time: a line when each ends, not progress bars.
+    run.quiet = options.quiet || (jobs > 1 && n > 1);
     run.force = options.force;
-    run.progress_label = scheme + " ";
-    RunRecord record;
+    run.progress_label = schemes[k] + " ";
     // One table for all schemes at the end, not one per run.
     std::ostringstream run_out;
-    const int code = run_scene(run, run_out, err, record);
-    // Without a folder of its own the scheme never ran: files found there
-    // are an earlier comparison's.
-    runs.push_back({scheme, scheme, code, record.message, !record.dir.empty()});
-    if (code == kExitInterrupted) {
+    codes[k] = run_scene(run, run_out, case_err, records[k]);
+  };
+  int exit_code = kExitOk;
+  work.finished = [&](int i, const std::string& text) {
+    const auto k = static_cast<std::size_t>(i);
+    err << text;
+    if (jobs > 1 && n > 1 && !options.quiet)
+      fmt::print(err, "emdae: {}: {} (exit code {})\n", schemes[k], ending(codes[k]), codes[k]);
+    if (codes[k] == kExitInterrupted) {
       exit_code = kExitInterrupted;
-      break;
+      return false;
     }
     // A scheme that finishes but misses a tolerance is a finding of the
     // comparison (its verdict is in compare.html and compare.json), not a
     // failure of it, unless asked for (--strict).
-    exit_code = worse(exit_code, code == kExitChecksFailed && !options.strict ? kExitOk : code);
+    if (exit_code != kExitInterrupted)
+      exit_code =
+          worse(exit_code, codes[k] == kExitChecksFailed && !options.strict ? kExitOk : codes[k]);
+    return true;
+  };
+  std::vector<ComparedRun> runs;
+  {
+    // The whole comparison hears Ctrl-C, also between two runs.
+    InterruptScope listening;
+    try {
+      run_cases(cases, std::min(jobs, n), work);
+    } catch (const std::exception& e) {
+      fmt::print(err, "emdae: error: {}\n", e.what());
+      return kExitInternal;
+    }
+  }
+  for (std::size_t k = 0; k < schemes.size(); ++k) {
+    if (codes[k] == kNotRun) continue;  // interrupted before it started
+    // Without a folder of its own the scheme never ran: files found there
+    // are an earlier comparison's.
+    runs.push_back({schemes[k], schemes[k], codes[k], records[k].message, !records[k].dir.empty()});
   }
 
   ReportInfo info = report_info(*scene->model, scene->settings);

@@ -1,0 +1,118 @@
+#include "cli/cluster.hpp"
+
+#include <cstdlib>
+
+#ifdef EMDAE_WITH_MPI
+// MPI's C interface alone (Open MPI's and MPICH's headers would pull in
+// their deprecated C++ bindings, which need a library of their own).
+#define OMPI_SKIP_MPICXX 1
+#define MPICH_SKIP_MPICXX 1
+#include <mpi.h>
+#endif
+
+namespace emdae {
+
+namespace {
+
+int g_rank = 0;
+int g_size = 1;
+bool g_started = false;  // this program called MPI_Init_thread
+
+#ifdef EMDAE_WITH_MPI
+constexpr int kResultTag = 14;
+
+// Started by mpirun/mpiexec (Open MPI, or a PMI launcher such as MPICH's
+// or Slurm's): only then is MPI started, so that a plain `emdae study`
+// (and the tests and the Python module) never touch it.
+bool under_launcher() {
+  for (const char* name : {"OMPI_COMM_WORLD_SIZE", "PMIX_RANK", "PMI_RANK", "PMI_SIZE"})
+    if (std::getenv(name)) return true;
+  return false;
+}
+#endif
+
+}  // namespace
+
+ClusterSession::ClusterSession([[maybe_unused]] int& argc, [[maybe_unused]] char**& argv) {
+#ifdef EMDAE_WITH_MPI
+  if (!under_launcher()) return;
+  int provided = 0;
+  if (MPI_Init_thread(&argc, &argv, MPI_THREAD_FUNNELED, &provided) != MPI_SUCCESS) return;
+  g_started = true;
+  MPI_Comm_rank(MPI_COMM_WORLD, &g_rank);
+  MPI_Comm_size(MPI_COMM_WORLD, &g_size);
+#endif
+}
+
+ClusterSession::~ClusterSession() {
+#ifdef EMDAE_WITH_MPI
+  if (g_started) MPI_Finalize();
+#endif
+  g_started = false;
+  g_rank = 0;
+  g_size = 1;
+}
+
+namespace cluster {
+
+int rank() {
+  return g_rank;
+}
+
+int size() {
+  return g_size;
+}
+
+int agree(int code) {
+#ifdef EMDAE_WITH_MPI
+  if (g_size > 1) {
+    int worst = code;
+    MPI_Allreduce(&code, &worst, 1, MPI_INT, MPI_MAX, MPI_COMM_WORLD);
+    return worst;
+  }
+#endif
+  return code;
+}
+
+int root_value(int code) {
+#ifdef EMDAE_WITH_MPI
+  if (g_size > 1) MPI_Bcast(&code, 1, MPI_INT, 0, MPI_COMM_WORLD);
+#endif
+  return code;
+}
+
+void send([[maybe_unused]] const std::string& bytes) {
+#ifdef EMDAE_WITH_MPI
+  if (g_size > 1)
+    MPI_Send(bytes.data(), static_cast<int>(bytes.size()), MPI_BYTE, 0, kResultTag, MPI_COMM_WORLD);
+#endif
+}
+
+bool receive([[maybe_unused]] std::string& bytes) {
+#ifdef EMDAE_WITH_MPI
+  if (g_size > 1) {
+    int flag = 0;
+    MPI_Status status;
+    MPI_Iprobe(MPI_ANY_SOURCE, kResultTag, MPI_COMM_WORLD, &flag, &status);
+    if (!flag) return false;
+    int count = 0;
+    MPI_Get_count(&status, MPI_BYTE, &count);
+    bytes.assign(static_cast<std::size_t>(count), '\0');
+    MPI_Recv(bytes.data(), count, MPI_BYTE, status.MPI_SOURCE, kResultTag, MPI_COMM_WORLD,
+             MPI_STATUS_IGNORE);
+    return true;
+  }
+#endif
+  return false;
+}
+
+void abort(int code) {
+#ifdef EMDAE_WITH_MPI
+  if (g_started) MPI_Abort(MPI_COMM_WORLD, code);
+#endif
+  std::exit(code);
+}
+
+}  // namespace cluster
+
+}  // namespace emdae
