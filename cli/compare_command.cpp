@@ -9,6 +9,7 @@
 #include <numeric>
 #include <sstream>
 
+#include "cli/cluster.hpp"
 #include "cli/command_support.hpp"
 #include "cli/parallel.hpp"
 #include "cli/progress.hpp"
@@ -42,6 +43,9 @@ const char* ending(int code) {
 }  // namespace
 
 int command_compare(const CompareOptions& options, std::ostream& out, std::ostream& err) {
+  // Under mpirun the comparison is rank 0's (its schemes on its threads):
+  // the others would run the same schemes into the same folders.
+  if (cluster::rank() != 0) return kExitOk;
   // The scene and the scheme names are checked before anything is run or
   // written: a typo must not cost the runs of the other schemes.
   std::unique_ptr<Scene> scene;
