@@ -17,6 +17,7 @@
 #include <string>
 #include <vector>
 
+#include "cli/parallel.hpp"
 #include "temp_dir.hpp"
 
 namespace emdae {
@@ -90,6 +91,40 @@ void expect_same_study(const fs::path& serial, const fs::path& other) {
   ASSERT_FALSE(a["measures"].empty());
   EXPECT_EQ(without_cpu(a), without_cpu(b));
   EXPECT_EQ(csv_without_cpu(serial / "study.csv"), csv_without_cpu(other / "study.csv"));
+}
+
+// The runs of a study with the default steps (h x 4, 2, 1, 1/2 for three
+// schemes, the reference at h/16 and its check at h/8), in steps per h:
+// shared by one, two and three ranks, every run goes to exactly one rank,
+// each rank's longest first, and no rank's estimated work exceeds the
+// average by more than the longest run it was given.
+TEST(ShareCases, EveryRunOnceLongestFirstAndBalanced) {
+  std::vector<double> cost = {16, 8};
+  for (int scheme = 0; scheme < 3; ++scheme)
+    for (double steps : {0.25, 0.5, 1.0, 2.0}) cost.push_back(steps);
+  double total = 0;
+  for (double c : cost) total += c;
+  for (int n_ranks : {1, 2, 3}) {
+    std::vector<int> seen(cost.size(), 0);
+    for (int rank = 0; rank < n_ranks; ++rank) {
+      const std::vector<int> mine = share_cases(cost, n_ranks, rank);
+      double work = 0;
+      for (std::size_t k = 0; k < mine.size(); ++k) {
+        ++seen[static_cast<std::size_t>(mine[k])];
+        work += cost[static_cast<std::size_t>(mine[k])];
+        if (k > 0) {
+          EXPECT_GE(cost[static_cast<std::size_t>(mine[k - 1])],
+                    cost[static_cast<std::size_t>(mine[k])]);
+        }
+      }
+      ASSERT_FALSE(mine.empty());
+      EXPECT_LE(work, total / n_ranks + cost[static_cast<std::size_t>(mine.front())]) << n_ranks;
+    }
+    for (int n : seen) EXPECT_EQ(n, 1) << n_ranks;
+  }
+  // Two ranks: the reference starts first on one, its check on the other.
+  EXPECT_EQ(share_cases(cost, 2, 0).front(), 0);
+  EXPECT_EQ(share_cases(cost, 2, 1).front(), 1);
 }
 
 TEST(StudyParallel, TwoJobsGiveTheFiguresOfOneAfterTheOther) {
