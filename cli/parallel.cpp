@@ -1,5 +1,6 @@
 #include "cli/parallel.hpp"
 
+#include <Eigen/Core>
 #include <algorithm>
 #include <chrono>
 #include <condition_variable>
@@ -83,6 +84,9 @@ void run_cases(const std::vector<int>& cases, int jobs, const CaseWork& work) {
     changed.notify_all();
   };
 
+  // Eigen's cache sizes for its matrix products, set before the threads
+  // first multiply at once.
+  Eigen::initParallel();
   const std::size_t n_threads = std::min(cases.size(), static_cast<std::size_t>(std::max(jobs, 1)));
   std::vector<std::thread> threads;
   active = static_cast<int>(n_threads);
