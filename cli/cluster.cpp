@@ -1,5 +1,6 @@
 #include "cli/cluster.hpp"
 
+#include <algorithm>
 #include <cstdlib>
 
 #ifdef EMDAE_WITH_MPI
@@ -20,6 +21,7 @@ bool g_started = false;  // this program called MPI_Init_thread
 
 #ifdef EMDAE_WITH_MPI
 constexpr int kResultTag = 14;
+#endif
 
 // Started by mpirun/mpiexec (Open MPI, or a PMI launcher such as MPICH's
 // or Slurm's): only then is MPI started, so that a plain `emdae study`
@@ -29,13 +31,25 @@ bool under_launcher() {
     if (std::getenv(name)) return true;
   return false;
 }
+
+#ifndef EMDAE_WITH_MPI
+// The number of processes the launcher started, as it tells them (1 when
+// it does not say).
+int launched_processes() {
+  for (const char* name : {"OMPI_COMM_WORLD_SIZE", "PMI_SIZE"})
+    if (const char* n = std::getenv(name)) return std::max(1, std::atoi(n));
+  return 1;
+}
 #endif
 
 }  // namespace
 
 ClusterSession::ClusterSession([[maybe_unused]] int& argc, [[maybe_unused]] char**& argv) {
-#ifdef EMDAE_WITH_MPI
   if (!under_launcher()) return;
+#ifndef EMDAE_WITH_MPI
+  // Each process would run the whole command into the same folder.
+  unsupported_ = launched_processes() > 1;
+#else
   int provided = 0;
   if (MPI_Init_thread(&argc, &argv, MPI_THREAD_FUNNELED, &provided) != MPI_SUCCESS) return;
   g_started = true;

@@ -18,6 +18,12 @@ class ClusterSession {
   ~ClusterSession();
   ClusterSession(const ClusterSession&) = delete;
   ClusterSession& operator=(const ClusterSession&) = delete;
+  /// Started as one of several processes by an MPI launcher, but built
+  /// without MPI: the processes cannot share anything.
+  bool unsupported() const { return unsupported_; }
+
+ private:
+  bool unsupported_ = false;
 };
 
 namespace cluster {
