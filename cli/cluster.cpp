@@ -1,7 +1,10 @@
 #include "cli/cluster.hpp"
 
 #include <algorithm>
+#include <chrono>
 #include <cstdlib>
+#include <ostream>
+#include <thread>
 
 #ifdef EMDAE_WITH_MPI
 // MPI's C interface alone (Open MPI's and MPICH's headers would pull in
@@ -21,6 +24,7 @@ bool g_started = false;  // this program called MPI_Init_thread
 
 #ifdef EMDAE_WITH_MPI
 constexpr int kResultTag = 14;
+constexpr int kReleaseTag = 15;
 #endif
 
 // Started by mpirun/mpiexec (Open MPI, or a PMI launcher such as MPICH's
@@ -60,6 +64,24 @@ ClusterSession::ClusterSession([[maybe_unused]] int& argc, [[maybe_unused]] char
 
 ClusterSession::~ClusterSession() {
 #ifdef EMDAE_WITH_MPI
+  if (g_started && g_size > 1) {
+    // Open MPI's MPI_Finalize waits for every rank by spinning: a rank done
+    // with its share would take a core from those still running (when the
+    // ranks outnumber the cores). So the others sleep until rank 0, the last
+    // to finish, releases them.
+    if (g_rank == 0) {
+      for (int r = 1; r < g_size; ++r)
+        MPI_Send(nullptr, 0, MPI_BYTE, r, kReleaseTag, MPI_COMM_WORLD);
+    } else {
+      for (;;) {
+        int flag = 0;
+        MPI_Iprobe(0, kReleaseTag, MPI_COMM_WORLD, &flag, MPI_STATUS_IGNORE);
+        if (flag) break;
+        std::this_thread::sleep_for(std::chrono::milliseconds(5));
+      }
+      MPI_Recv(nullptr, 0, MPI_BYTE, 0, kReleaseTag, MPI_COMM_WORLD, MPI_STATUS_IGNORE);
+    }
+  }
   if (g_started) MPI_Finalize();
 #endif
   g_started = false;
@@ -93,6 +115,16 @@ int root_value(int code) {
   if (g_size > 1) MPI_Bcast(&code, 1, MPI_INT, 0, MPI_COMM_WORLD);
 #endif
   return code;
+}
+
+int settle(int code, const std::string& held, std::ostream& err) {
+  if (g_size == 1) return code;
+  const int worst = agree(code);
+  const int at_root = root_value(code);
+  if (g_rank != 0 && code != 0 && at_root == 0) err << "emdae: rank " << g_rank << ": " << held;
+  if (g_rank == 0 && code == 0 && worst != 0)
+    err << "emdae: error: another rank of the MPI job cannot run the command (above)\n";
+  return code != 0 ? code : worst;
 }
 
 void send([[maybe_unused]] const std::string& bytes) {

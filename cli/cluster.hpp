@@ -6,6 +6,7 @@
 // threads of a rank never call it). Internal to cli/.
 #pragma once
 
+#include <iosfwd>
 #include <string>
 
 namespace emdae {
@@ -37,6 +38,14 @@ int size();
 int agree(int code);
 /// Rank 0's value of `code` on every rank. Collective.
 int root_value(int code);
+
+/// The checks before the runs, settled among the ranks (collective; on one
+/// rank `code` itself): every rank's exit code goes to all; the result is
+/// this rank's own code, or the worst of the others'. A rank other than 0
+/// writes only to `held` while it checks: its text reaches `err` when rank 0
+/// found nothing wrong (else rank 0 has said it, once); rank 0 says when
+/// another rank refused.
+int settle(int code, const std::string& held, std::ostream& err);
 
 /// To rank 0: one case's result, as bytes.
 void send(const std::string& bytes);

@@ -257,16 +257,7 @@ int command_study(const StudyOptions& options, std::ostream& out, std::ostream& 
   const bool root = cluster::rank() == 0;
   std::ostringstream held;
   std::ostream& err = root ? console_err : held;
-  const auto agreed = [&](int code) {
-    if (cluster::size() == 1) return code;
-    const int worst = cluster::agree(code);
-    const int at_root = cluster::root_value(code);
-    if (!root && code != kExitOk && at_root == kExitOk)
-      fmt::print(console_err, "emdae: rank {}: {}", cluster::rank(), held.str());
-    if (root && code == kExitOk && worst != kExitOk)
-      fmt::print(err, "emdae: error: another rank of the MPI job cannot run the study (above)\n");
-    return code != kExitOk ? code : worst;
-  };
+  const auto agreed = [&](int code) { return cluster::settle(code, held.str(), console_err); };
   const auto refuse = [&](const std::string& message) { return agreed(bad_input(err, message)); };
   // Everything is checked before anything runs or is written: the scene, the
   // lists, and every run of the study as its scene and stepper.

@@ -228,6 +228,38 @@ TEST(StudyMpi, AFailedRunOnAnyRankReachesRankZero) {
   EXPECT_EQ(ranks.output.find(failed, at + 1), std::string::npos) << ranks.output;
 }
 
+TEST(CompareMpi, TwoRanksWriteTheFoldersOfOneAfterTheOther) {
+  // The free ring writes fields: rank 1's runs travel to rank 0 as files.
+  TempDir dir;
+  const std::string args = "compare " + quote(example("free_ring")) +
+                           " --schemes em,midpoint,galpha,ida --t-end 0.5 -q --out ";
+  const Result one = emdae(args + quote(dir / "one") + " --jobs 1");
+  ASSERT_EQ(one.code, 0) << one.output;
+  const Result ranks = mpirun(args + quote(dir / "ranks"), dir.path());
+  ASSERT_EQ(ranks.code, 0) << ranks.output;
+  EXPECT_EQ(read_json(dir.path() / "one/compare.json"),
+            read_json(dir.path() / "ranks/compare.json"));
+  for (const char* scheme : {"em", "midpoint", "galpha", "ida"}) {
+    const fs::path a = dir.path() / "one" / scheme, b = dir.path() / "ranks" / scheme;
+    EXPECT_EQ(without_cpu(read_json(a / "summary.json")),
+              without_cpu(read_json(b / "summary.json")))
+        << scheme;
+    // Every file but the report (its CPU seconds and date) and the summary
+    // (its CPU seconds) the same, byte for byte.
+    std::vector<std::string> files;
+    for (const auto& e : fs::recursive_directory_iterator(a)) {
+      if (!e.is_regular_file()) continue;
+      const std::string name = fs::relative(e.path(), a).string();
+      files.push_back(name);
+      if (name == "report.html" || name == "summary.json") continue;
+      EXPECT_EQ(test_systems::read_text(e.path()), test_systems::read_text(b / name))
+          << scheme << "/" << name;
+    }
+    EXPECT_GT(files.size(), 4u) << scheme;  // history, summary, report, fields.pvd, VTU
+    EXPECT_TRUE(fs::exists(b / "fields.pvd")) << scheme;
+  }
+}
+
 TEST(StudyMpi, BadInputStopsEveryRankWithOneMessage) {
   TempDir dir;
   const Result r = mpirun(
