@@ -83,7 +83,8 @@ int command_run(const RunOptions& options, std::ostream& out, std::ostream& err)
 /// [tolerances] check (that is the comparison's finding, not its failure;
 /// with `strict` it is 4); otherwise the worst of the runs (a scheme that
 /// refuses the scene counts as a failed run, 3); bad input (scene, unknown
-/// scheme name) is 2 before anything runs.
+/// scheme name) is 2 before anything runs. The schemes run `jobs` at a
+/// time, and under mpirun shared among the ranks, rank 0 writing DIR.
 int command_compare(const CompareOptions& options, std::ostream& out, std::ostream& err);
 
 /// Runs the scene with scheme em at the reference step (and at twice it,
@@ -92,7 +93,10 @@ int command_compare(const CompareOptions& options, std::ostream& out, std::ostre
 /// Every run is checked (scene and stepper) before the first one starts: bad
 /// input is 2 with nothing written. A run that fails is recorded and the
 /// others still run; exit code: the worst of the runs (3 for a failure; the
-/// scene's [tolerances] are not checked), 130 when interrupted.
+/// scene's [tolerances] are not checked), 130 when interrupted. The runs go
+/// `jobs` at a time, and under mpirun shared among the ranks, rank 0
+/// gathering them and writing DIR; the figures are those of one run after
+/// the other, but the CPU seconds.
 int command_study(const StudyOptions& options, std::ostream& out, std::ostream& err);
 
 int command_check(const std::string& scene_path, const std::vector<std::string>& overrides,
