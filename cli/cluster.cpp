@@ -123,7 +123,8 @@ int settle(int code, const std::string& held, std::ostream& err) {
   const int at_root = root_value(code);
   if (g_rank != 0 && code != 0 && at_root == 0) err << "emdae: rank " << g_rank << ": " << held;
   if (g_rank == 0 && code == 0 && worst != 0)
-    err << "emdae: error: another rank of the MPI job cannot run the command (above)\n";
+    err << "emdae: error: another rank of the MPI job cannot run the command (its message: "
+           "\"emdae: rank N: ...\")\n";
   return code != 0 ? code : worst;
 }
 

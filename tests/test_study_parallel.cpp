@@ -228,6 +228,27 @@ TEST(StudyMpi, AFailedRunOnAnyRankReachesRankZero) {
   EXPECT_EQ(ranks.output.find(failed, at + 1), std::string::npos) << ranks.output;
 }
 
+TEST(StudyMpi, ARankThatCannotReadTheSceneStopsTheJob) {
+  // Rank 1 is given a scene file that is not there (mpirun's A : B form): it
+  // says so, with its rank; rank 0, whose scene is fine, says another rank
+  // refused; every rank exits 2 and the folder rank 0 made is gone.
+  TempDir dir;
+  const std::string root_ok =
+      ::geteuid() == 0 ? "OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 " : "";
+  const std::string study = " study --schemes em --t-end 0.2 --out " + quote(dir / "s") + " ";
+  const std::string n1 = std::string(" ") + EMDAE_MPIEXEC_NUMPROC_FLAG + " 1 --oversubscribe ";
+  const Result r = test_systems::shell("cd " + quote(dir.path().string()) + " && " + root_ok +
+                                       quote(EMDAE_MPIEXEC) + n1 + quote(EMDAE_EXE) + study +
+                                       quote(example("double_pendulum")) + " :" + n1 +
+                                       quote(EMDAE_EXE) + study + quote(dir / "nope.toml"));
+  EXPECT_EQ(r.code, 2) << r.output;
+  EXPECT_NE(r.output.find("emdae: rank 1: emdae: error: " + dir / "nope.toml"), std::string::npos)
+      << r.output;
+  EXPECT_NE(r.output.find("another rank of the MPI job cannot run the command"), std::string::npos)
+      << r.output;
+  EXPECT_FALSE(fs::exists(dir.path() / "s"));
+}
+
 TEST(CompareMpi, TwoRanksWriteTheFoldersOfOneAfterTheOther) {
   // The free ring writes fields: rank 1's runs travel to rank 0 as files.
   TempDir dir;
