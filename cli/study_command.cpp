@@ -9,6 +9,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <limits>
+#include <mutex>
 #include <numeric>
 #include <sstream>
 
@@ -424,13 +425,14 @@ int command_study(const StudyOptions& options, std::ostream& out, std::ostream& 
   for (std::size_t i = first_run; i < plan.size(); ++i) study.runs.push_back(plan[i].run);
   study.families = families;
   study.groups = node_groups(*scene->model);
-  // The times every run takes its positions at: the given ones, or a grid
-  // of the largest step the default ones are chosen from once the
-  // reference has run (where every run with a step dividing it lands
-  // exactly).
+  // The times a run takes its positions at: the given ones; or, until the
+  // reference has ended, a grid of the largest step the default ones are
+  // chosen from (where every run with a step dividing it lands exactly),
+  // and once it has, the chosen ones (runs that start then keep less).
   const double largest_step = has_steps ? dts.front() : scene_dt;
   const std::vector<double> grid = capture_grid(largest_step, t_end);
-  const std::vector<double> capture = given_times ? *given_times : grid;
+  std::vector<double> capture = given_times ? *given_times : grid;
+  std::mutex capture_mutex;  // set by the calling thread, read by the workers
 
   ReportInfo info = report_info(*scene->model, scene->settings);
   info.scheme.clear();
@@ -465,11 +467,12 @@ int command_study(const StudyOptions& options, std::ostream& out, std::ostream& 
   scene.reset();  // each run loads its own
 
   // The runs: one after the other, or --jobs at a time (the longest
-  // first), and under MPI shared among the ranks. Every run takes the
-  // positions at the same times, `capture` (the chosen ones are not known
-  // before the reference has run); once they are, each run keeps those
-  // alone, as the reference does, so that the figures do not depend on the
-  // order the runs end in. The tables are rewritten after each, so that an
+  // first), and under MPI shared among the ranks. A run that starts before
+  // the reference has ended takes the positions on the whole grid
+  // (`capture`); once the chosen times are known it keeps those alone, as
+  // the reference does. A position at a time is interpolated from the same
+  // two states whatever other times are taken, so the figures do not depend
+  // on the order the runs start and end in. The tables are rewritten after each, so that an
   // interrupted or crashed study keeps what it did.
   const int n_runs = static_cast<int>(plan.size());
   const int n_ranks = cluster::size();
@@ -503,8 +506,13 @@ int command_study(const StudyOptions& options, std::ostream& out, std::ostream& 
   work.hold_text = !root;
   work.run = [&](int i, std::ostream& case_err) {
     const auto k = static_cast<std::size_t>(i);
+    std::vector<double> times;
+    {
+      std::lock_guard<std::mutex> lock(capture_mutex);
+      times = capture;
+    }
     codes[k] = study_run(options.scene_path, plan[k].overrides, plan[k].label,
-                         options.quiet || !one_at_a_time, capture, groups, case_err, results[k]);
+                         options.quiet || !one_at_a_time, times, groups, case_err, results[k]);
   };
   int exit_code = kExitOk;
   bool interrupted = false;
@@ -528,6 +536,10 @@ int command_study(const StudyOptions& options, std::ostream& out, std::ostream& 
         study.times = default_times(grid, t_end, ref.contact_first, ref.contact_last, largest_step);
       }
       keep_chosen(0);
+      {
+        std::lock_guard<std::mutex> lock(capture_mutex);
+        capture = ref.times;
+      }
       study.measures = define_measures(families, study.times, study.groups, ref, study.size, t_end,
                                        contact, study.dimension);
       for (int j = 1; j < n_runs; ++j)
