@@ -87,8 +87,8 @@ void set_option(CLI::App* c, std::vector<std::string>& assignments,
 
 void jobs_option(CLI::App* c, int& jobs, const char* cases) {
   c->add_option("-j,--jobs", jobs,
-                std::string("How many ") + cases +
-                    " run at once, each on a thread of its own (default: the hardware "
+                std::string("Number of ") + cases +
+                    " to run at once, each on a thread of its own (default: the hardware "
                     "threads; under mpirun: 1 per rank; 1: one after the other)")
       ->type_name("N")
       ->check(CLI::Range(1, 4096));
