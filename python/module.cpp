@@ -835,7 +835,7 @@ void bind_commands(py::module_& m) {
       "_compare",
       [](const std::string& scene_path, const std::string& schemes, const std::string& dt,
          const std::string& t_end, const std::string& out_dir,
-         const std::vector<std::string>& overrides) {
+         const std::vector<std::string>& overrides, int jobs) {
         CompareOptions o;
         o.scene_path = scene_path;
         o.schemes = schemes;
@@ -844,6 +844,7 @@ void bind_commands(py::module_& m) {
         o.out_dir = out_dir;
         o.overrides = overrides;
         o.quiet = true;
+        o.jobs = jobs;
         std::ostringstream out, err;
         int code;
         {
@@ -853,7 +854,7 @@ void bind_commands(py::module_& m) {
         return py::make_tuple(code, out.str(), err.str());
       },
       py::arg("scene_path"), py::arg("schemes"), py::arg("dt"), py::arg("t_end"),
-      py::arg("out_dir"), py::arg("overrides"));
+      py::arg("out_dir"), py::arg("overrides"), py::arg("jobs"));
   m.def(
       "_study",
       [](const std::string& scene_path, const std::string& schemes,
@@ -861,7 +862,7 @@ void bind_commands(py::module_& m) {
          const std::string& t_end, const std::string& reference_dt,
          const std::optional<std::string>& times, const std::optional<std::string>& measures,
          bool reference_check, const std::string& out_dir,
-         const std::vector<std::string>& overrides) {
+         const std::vector<std::string>& overrides, int jobs) {
         StudyOptions o;
         o.scene_path = scene_path;
         o.schemes = schemes;
@@ -875,6 +876,7 @@ void bind_commands(py::module_& m) {
         o.out_dir = out_dir;
         o.overrides = overrides;
         o.quiet = true;
+        o.jobs = jobs;
         std::ostringstream out, err;
         int code;
         {
@@ -885,7 +887,7 @@ void bind_commands(py::module_& m) {
       },
       py::arg("scene_path"), py::arg("schemes"), py::arg("dts"), py::arg("tols"), py::arg("t_end"),
       py::arg("reference_dt"), py::arg("times"), py::arg("measures"), py::arg("reference_check"),
-      py::arg("out_dir"), py::arg("overrides"));
+      py::arg("out_dir"), py::arg("overrides"), py::arg("jobs"));
 }
 
 }  // namespace

@@ -10,6 +10,7 @@ packages=(
   libgtest-dev libgmock-dev libbenchmark-dev
   python3 python3-meshio python3-numpy gnuplot-nox
   python3-dev pybind11-dev python3-pytest python3-matplotlib
+  libopenmpi-dev openmpi-bin
 )
 if [[ "${EMDAE_BROWSER_TESTS:-1}" == 1 ]]; then packages+=(chromium); fi
 # The fuzz targets (fuzz/, cmake --preset fuzz): clang with libFuzzer.
