@@ -665,7 +665,11 @@ void bind_settings(py::module_& m) {
   py::class_<OutputSettings>(m, "OutputSettings")
       .def(py::init<>())
       .def_readwrite("every", &OutputSettings::every)
-      .def_readwrite("vtu_every", &OutputSettings::vtu_every);
+      .def_readwrite("vtu_every", &OutputSettings::vtu_every)
+      .def_property(
+          "vtu_format",
+          [](const OutputSettings& s) { return std::string(to_string(s.vtu_format)); },
+          [](OutputSettings& s, const std::string& w) { s.vtu_format = parse_vtu_format(w); });
   py::class_<Tolerances>(m, "Tolerances")
       .def(py::init<>())
       .def_readwrite("energy_rel", &Tolerances::energy_rel)

@@ -6,7 +6,7 @@ set -euo pipefail
 packages=(
   build-essential cmake pkg-config
   libsundials-dev libeigen3-dev libsuitesparse-dev libgsl-dev
-  libtomlplusplus-dev libcli11-dev libfmt-dev nlohmann-json3-dev
+  libtomlplusplus-dev libcli11-dev libfmt-dev nlohmann-json3-dev zlib1g-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   python3 python3-meshio python3-numpy gnuplot-nox
   python3-dev pybind11-dev python3-pytest python3-matplotlib
