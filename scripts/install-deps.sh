@@ -12,6 +12,8 @@ packages=(
   python3-dev pybind11-dev python3-pytest python3-matplotlib
 )
 if [[ "${EMDAE_BROWSER_TESTS:-1}" == 1 ]]; then packages+=(chromium); fi
+# VTK's own reader (ParaView's) for the VTU tests (tests/test_report.cpp; ~230 MB).
+if [[ "${EMDAE_VTK_TESTS:-1}" == 1 ]]; then packages+=(python3-vtk9); fi
 # The fuzz targets (fuzz/, cmake --preset fuzz): clang with libFuzzer.
 if [[ "${EMDAE_FUZZ:-0}" == 1 ]]; then packages+=(clang-14 libclang-rt-14-dev); fi
 

@@ -166,9 +166,12 @@ void FieldWriter::write(const State& state, long step) {
   x += "</FieldData>\n";
   x += fmt::format("<Piece NumberOfPoints=\"{}\" NumberOfCells=\"{}\">\n", n_points, n_cells);
 
-  // One DataArray: `values` holds the tuples of `components` values each.
+  // One DataArray: `values` holds the tuples of `components` values each;
+  // ASCII puts `per_line` values on a line (0: a tuple). VTK reads the cells'
+  // connectivity only as one component, whatever the line layout.
   const auto array = [&](const char* type, const std::string& name, int components,
-                         const auto& values, const char* extra = "") {
+                         const auto& values, const char* extra = "", int per_line = 0) {
+    const auto line = static_cast<std::size_t>(per_line > 0 ? per_line : components);
     x += fmt::format("<DataArray type=\"{}\" Name=\"{}\"", type, xml_escape(name));
     if (components > 1) x += fmt::format(" NumberOfComponents=\"{}\"", components);
     x += extra;
@@ -176,7 +179,7 @@ void FieldWriter::write(const State& state, long step) {
     if (ascii) {
       for (std::size_t i = 0; i < values.size(); ++i) {
         put(x, values[i]);
-        x += (i + 1) % static_cast<std::size_t>(components) == 0 ? '\n' : ' ';
+        x += (i + 1) % line == 0 ? '\n' : ' ';
       }
     } else {
       vtu::append_zlib_blocks(x, values.data(), values.size() * sizeof(values[0]), zlib_level_);
@@ -222,7 +225,7 @@ void FieldWriter::write(const State& state, long step) {
       for (int a = 0; a < 4; ++a) ints.push_back(base + quad[static_cast<std::size_t>(a)]);
     base += b.mesh.n_nodes();
   }
-  array("Int64", "connectivity", 4, ints);
+  array("Int64", "connectivity", 1, ints, "", 4);  // a quad a line
   ints.clear();
   for (std::int64_t c = 1; c <= n_cells; ++c) ints.push_back(4 * c);
   array("Int64", "offsets", 1, ints);
