@@ -340,8 +340,13 @@ def main():
     a = ap.parse_args()
 
     gf = import_getfem()
-    import numpy as np
+    np = None
+    if gf is not None:
+        import numpy as np  # GetFEM's arrays; emdae's side needs none
 
+    if not os.access(a.emdae, os.X_OK):
+        raise SystemExit(f"no emdae at {a.emdae}: build it (cmake --build build/release) "
+                         "or pass --emdae")
     scene = Scene(a.scene, a.t_end)
     steps = scene.steps()
     schemes = a.getfem_scheme.split(",") if gf else []
