@@ -14,10 +14,11 @@ Both programs integrate the same problem, read from one scene file
 
 and the runs are interleaved, A B A B (--pairs), so that both see the same
 load of a shared machine. Times are CPU seconds of the time loop only (emdae:
-summary.json's cpu_seconds; GetFEM: process CPU time around its loop, which
-counts every thread it may use), divided by the number of time steps of size
-dt in [0, t_end]. Setting up the model, writing reports and computing the
-energies for the table are outside both.
+summary.json's cpu_seconds, which includes its per-step recording of energies
+and momenta; GetFEM: process CPU time around its steps, which counts every
+thread it may use, without the energy evaluation for the table), divided by
+the number of time steps of size dt in [0, t_end]. Setting up the model and
+writing reports are outside both.
 
 GetFEM's side (python3-getfem, 5.4 in Debian bookworm):
   - the momentum balance of the implicit midpoint rule (--getfem-scheme
