@@ -14,6 +14,8 @@ packages=(
 if [[ "${EMDAE_BROWSER_TESTS:-1}" == 1 ]]; then packages+=(chromium); fi
 # VTK's own reader (ParaView's) for the VTU tests (tests/test_report.cpp; ~230 MB).
 if [[ "${EMDAE_VTK_TESTS:-1}" == 1 ]]; then packages+=(python3-vtk9); fi
+# GetFEM for bench/ring_vs_getfem.py (the side-by-side timing of issue 14): on request.
+if [[ "${EMDAE_GETFEM:-0}" == 1 ]]; then packages+=(python3-getfem); fi
 # The fuzz targets (fuzz/, cmake --preset fuzz): clang with libFuzzer.
 if [[ "${EMDAE_FUZZ:-0}" == 1 ]]; then packages+=(clang-14 libclang-rt-14-dev); fi
 
