@@ -5,6 +5,7 @@ find_package(fmt REQUIRED)
 find_package(nlohmann_json 3.10 REQUIRED)
 find_package(tomlplusplus 3 REQUIRED)
 find_package(CLI11 2 REQUIRED)
+find_package(ZLIB REQUIRED)  # compressed VTU fields (zlib1g-dev)
 
 # SUNDIALS 6.4 (KINSOL, IDA, sparse matrix; SUNDIALS::KLU: the KLU it was built with). Debian's config
 # file lists targets for every optional module; we use the shared libraries.

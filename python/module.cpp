@@ -693,7 +693,17 @@ void bind_settings(py::module_& m) {
       .def(py::init<>())
       .def_readwrite("every", &OutputSettings::every)
       .def_readwrite("vtu_every", &OutputSettings::vtu_every)
-      .def_readwrite("track", &OutputSettings::track);
+      .def_readwrite("track", &OutputSettings::track)
+      .def_property(
+          "vtu_format",
+          [](const OutputSettings& s) { return std::string(to_string(s.vtu_format)); },
+          [](OutputSettings& s, const std::string& w) {
+            try {
+              s.vtu_format = parse_vtu_format(w);
+            } catch (const std::invalid_argument& e) {
+              throw InputError(std::string("output.vtu_format: ") + e.what());
+            }
+          });
   py::class_<Tolerances>(m, "Tolerances")
       .def(py::init<>())
       .def_readwrite("energy_rel", &Tolerances::energy_rel)

@@ -95,7 +95,8 @@ class FieldOutput {
         bodies.push_back({b.name, b.mesh, b.info.node_offset, b.material});
     if (settings.out_dir.empty() || bodies.empty() || every_ == 0) return;
     try {
-      writer_ = std::make_unique<FieldWriter>(settings.out_dir, std::move(bodies), model.dim());
+      writer_ = std::make_unique<FieldWriter>(settings.out_dir, std::move(bodies), model.dim(),
+                                              settings.output.vtu_format);
       if (model.system().n_unilateral() > 0)
         writer_->add_point_scalar("contact_pressure", [&system = model.system()](const State& s) {
           return contact_pressure_field(system, s);

@@ -32,6 +32,7 @@
 #include "verify/contact_pressure.hpp"
 #include "verify/recorder.hpp"
 #include "verify/summary.hpp"
+#include "verify/vtu.hpp"
 
 namespace emdae {
 
@@ -40,6 +41,8 @@ struct OutputSettings {
   // VTU fields of the bodies every `vtu_every` steps (and the first and last);
   // -1: automatic (about 100 files over the run), 0: none.
   long vtu_every = -1;
+  // How the VTU arrays are written: compressed binary, or ASCII for reading by eye.
+  VtuFormat vtu_format = VtuFormat::Binary;
   // Times at which the report draws the bodies (snapshots); empty: chosen
   // from the run (before, during and after each contact window).
   std::vector<double> snapshots;

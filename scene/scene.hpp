@@ -32,6 +32,7 @@
 //                  load_time: equilibrium first (or only, without [time])
 //   [output]       every (history row every N steps, default 1), vtu_every (VTU
 //                  fields of FE bodies every N steps; default about 100 files, 0: none),
+//                  vtu_format ("binary": compressed, the default; "ascii")
 //                  track = ["body.set", ...] (node sets whose trajectories are
 //                  written with the particles')
 //   [limits]       max_steps (default 1e7), max_memory_mb (default 4096): a run

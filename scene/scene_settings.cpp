@@ -211,7 +211,7 @@ void Builder::parse_statics(const Fields& f) {
 }
 
 void Builder::parse_output(const Fields& f) {
-  f.only({"every", "vtu_every", "snapshots", "animation_frames", "track"});
+  f.only({"every", "vtu_every", "vtu_format", "snapshots", "animation_frames", "track"});
   const long every = f.integer("every", 1);
   if (every < 1) f.fail_key("every", "must be at least 1, received " + std::to_string(every));
   settings().output.every = static_cast<int>(std::min<long>(every, 1L << 30));
@@ -220,6 +220,15 @@ void Builder::parse_output(const Fields& f) {
     f.fail_key("vtu_every",
                "must be 0 (no fields) or at least 1, received " + std::to_string(vtu_every));
   settings().output.vtu_every = vtu_every;
+  if (const auto format = f.optional_string("vtu_format")) {
+    try {
+      settings().output.vtu_format = parse_vtu_format(*format);
+    } catch (const std::invalid_argument&) {
+      f.fail_key("vtu_format", "must be \"binary\" or \"ascii\", received " +
+                                   show(*f.find("vtu_format")) +
+                                   hint(*format, {"binary", "ascii"}, "formats"));
+    }
+  }
   if (f.has("snapshots")) {
     const std::vector<double> times =
         f.numbers("snapshots", "times at which the report draws the bodies");

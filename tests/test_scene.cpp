@@ -16,6 +16,7 @@
 #include "scene/scene.hpp"
 #include "temp_dir.hpp"
 #include "verify/recorder.hpp"
+#include "verify/vtu.hpp"
 
 namespace emdae {
 namespace {
@@ -179,6 +180,15 @@ std::vector<Malformed> malformed_scenes() {
        kValid + "[output]\nevery = 0\n",
        "every",
        {"key 'output.every'", "received 0"}},
+      {"output_vtu_format_unknown",
+       kValid + "[output]\nvtu_format = \"asci\"\n",
+       "vtu_format",
+       {"key 'output.vtu_format'", "\"binary\" or \"ascii\"", "received \"asci\"",
+        "did you mean 'ascii'?"}},
+      {"output_vtu_format_not_string",
+       kValid + "[output]\nvtu_format = 1\n",
+       "vtu_format",
+       {"key 'output.vtu_format'", "must be a string", "received integer 1"}},
       {"tolerance_negative",
        kValid + "[tolerances]\nenergy_rel = -1e-9\n",
        "energy_rel",
@@ -315,6 +325,7 @@ TEST(Scene, DefaultsApply) {
   EXPECT_EQ(scene->settings.schemes.newton.max_iterations, 20);
   EXPECT_FALSE(scene->settings.schemes.newton.line_search);
   EXPECT_EQ(scene->settings.output.every, 1);
+  EXPECT_EQ(scene->settings.output.vtu_format, VtuFormat::Binary);
   EXPECT_FALSE(scene->settings.tolerances.any());
   EXPECT_EQ(scene->system().n_nodes(), 2);
   EXPECT_EQ(scene->system().n_constraints(), 0);
@@ -397,14 +408,15 @@ TEST(Scene, TextWithSourceName) {
 TEST(SceneOverrides, ReplaceAndAddValues) {
   TempDir dir;
   const std::string path = dir.write("o.toml", kValid);
-  const auto scene =
-      load_scene(path, {"time.dt=0.005", "scheme.name=midpoint", "particles[1].mass=3",
-                        "gravity.acceleration=[0, -1]", "output.every = 5"});
+  const auto scene = load_scene(
+      path, {"time.dt=0.005", "scheme.name=midpoint", "particles[1].mass=3",
+             "gravity.acceleration=[0, -1]", "output.every = 5", "output.vtu_format=ascii"});
   EXPECT_DOUBLE_EQ(scene->settings.time.dt, 0.005);
   EXPECT_EQ(scene->settings.scheme, "midpoint");
   EXPECT_DOUBLE_EQ(scene->system().lumped_mass()[2], 3.0);
   EXPECT_EQ(scene->system().potentials().size(), 2u);
   EXPECT_EQ(scene->settings.output.every, 5);
+  EXPECT_EQ(scene->settings.output.vtu_format, VtuFormat::Ascii);
 }
 
 TEST(SceneOverrides, AreValidatedAndNamed) {
