@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cstdlib>
 #include <ostream>
+#include <string>
 #include <thread>
 
 #ifdef EMDAE_WITH_MPI
@@ -121,7 +122,11 @@ int settle(int code, const std::string& held, std::ostream& err) {
   if (g_size == 1) return code;
   const int worst = agree(code);
   const int at_root = root_value(code);
-  if (g_rank != 0 && code != 0 && at_root == 0) err << "emdae: rank " << g_rank << ": " << held;
+  // One write of the whole line: std::cerr is unbuffered, and each insertion
+  // was a write(2) of its own, which the other ranks' messages on the same
+  // terminal or pipe could split ("emdae: rank " ... "1: emdae: error: ...").
+  if (g_rank != 0 && code != 0 && at_root == 0)
+    err << ("emdae: rank " + std::to_string(g_rank) + ": " + held) << std::flush;
   if (g_rank == 0 && code == 0 && worst != 0)
     err << "emdae: error: another rank of the MPI job cannot run the command (its message: "
            "\"emdae: rank N: ...\")\n";
