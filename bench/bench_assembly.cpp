@@ -33,6 +33,7 @@
 // 32 M Jacobian triplets). Run with --benchmark_filter to pick a subset; see
 // docs/performance.md for the commands and the measured tables.
 #include <benchmark/benchmark.h>
+#include <klu.h>
 
 #include <cmath>
 #include <ctime>
@@ -116,6 +117,35 @@ Scene& scene(MaterialModel model, int nx, int ny) {
   }
   sc->v0 = (sc->q1 - sc->q0) / kDt;
   (void)s.mass();  // assembled once, outside the timing
+  cached = std::move(sc);
+  return *cached;
+}
+
+// The two rings of examples/ring_impact.toml (64 x 1 elements each, 512
+// dofs), deformed and stepped like the rectangles.
+Scene& ring_scene(MaterialModel model) {
+  static std::unique_ptr<Scene> cached;
+  if (cached && cached->model == model) return *cached;
+  auto sc = std::make_unique<Scene>();
+  sc->model = model;
+  sc->system = std::make_unique<System>(2);
+  for (double cx : {-110.0, 110.0}) {
+    const Mesh mesh = ring_mesh(Eigen::Vector2d(cx, cx > 0 ? 20.0 : 0.0), 47.0, 50.0, 64, 1);
+    add_body(*sc->system, mesh, material_of(model));
+    sc->n_elements += mesh.n_elements();
+  }
+  const System& s = *sc->system;
+  sc->n_dofs = s.n_dofs();
+  sc->q0.resize(s.n_dofs());
+  sc->q1.resize(s.n_dofs());
+  const Vec& x = s.initial_positions();
+  for (int n = 0; n < s.n_nodes(); ++n) {
+    const Eigen::Vector2d xn = x.segment<2>(2 * n);
+    sc->q1.segment<2>(2 * n) = deformed(xn, 10.0);
+    sc->q0.segment<2>(2 * n) = sc->q1.segment<2>(2 * n) - increment(xn, 10.0);
+  }
+  sc->v0 = (sc->q1 - sc->q0) / kDt;
+  (void)s.mass();
   cached = std::move(sc);
   return *cached;
 }
@@ -228,6 +258,100 @@ void bm_residual(benchmark::State& st, MaterialModel model, GradientKind kind) {
   set_rates(st, sc.n_elements, sc.n_dofs);
 }
 
+// The iteration as StepProblem does it (see the header).
+struct SlotIteration {
+  const Scene& sc;
+  GradientKind kind;
+  Assembler assembler;
+  JacobianPattern pattern;
+  Triplets trip;
+  SparseMatrix j;
+  Vec f;
+  SlotIteration(const Scene& scene, GradientKind k)
+      : sc(scene), kind(k), assembler(*scene.system), f(scene.n_dofs) {}
+  void residual() {
+    const System& s = *sc.system;
+    f.noalias() = (2.0 / (kDt * kDt)) * (s.mass() * (sc.q1 - sc.q0 - kDt * sc.v0));
+    assembler.add_potential_forces(kind, sc.q0, sc.q1, 0.0, kDt, f, nullptr);
+    benchmark::DoNotOptimize(f.data());
+  }
+  void jacobian() {
+    trip.clear();
+    assembler.add_mass(trip, 2.0 / (kDt * kDt));
+    pattern.prepare(trip, *sc.system, sc.n_dofs, j);
+    pattern.scatter(trip, j);
+    assembler.add_potential_jacobian(kind, sc.q0, sc.q1, 0.0, kDt, j.valuePtr(),
+                                     pattern.potential_slots());
+    benchmark::DoNotOptimize(j.valuePtr());
+  }
+};
+
+void bm_newton_slots(benchmark::State& st, MaterialModel model, GradientKind kind) {
+  const int nx = static_cast<int>(st.range(0)), ny = static_cast<int>(st.range(1));
+  Scene& sc = scene(model, nx, ny);
+  SlotIteration it(sc, kind);
+  it.jacobian();  // the pattern, once
+  double t_res = 0, t_jac = 0;
+  for (auto _ : st) {
+    const double t0 = thread_cpu_seconds();
+    it.residual();
+    const double t1 = thread_cpu_seconds();
+    it.jacobian();
+    const double t2 = thread_cpu_seconds();
+    t_res += t1 - t0;
+    t_jac += t2 - t1;
+  }
+  using C = benchmark::Counter;
+  st.counters["res_s"] = C(t_res, C::kAvgIterations);
+  st.counters["jac_s"] = C(t_jac, C::kAvgIterations);
+  st.counters["dofs"] = sc.n_dofs;
+  st.counters["nnz"] = static_cast<double>(it.j.nonZeros());
+  set_rates(st, sc.n_elements, sc.n_dofs);
+}
+
+void bm_floor(benchmark::State& st, Scene& sc, GradientKind kind) {
+  SlotIteration it(sc, kind);
+  it.jacobian();
+  klu_l_common common;
+  klu_l_defaults(&common);
+  common.ordering = 0;  // AMD, as integrators/newton.cpp
+  common.tol = 0.1;
+  klu_l_symbolic* symbolic =
+      klu_l_analyze(sc.n_dofs, it.j.outerIndexPtr(), it.j.innerIndexPtr(), &common);
+  klu_l_numeric* numeric =
+      klu_l_factor(it.j.outerIndexPtr(), it.j.innerIndexPtr(), it.j.valuePtr(), symbolic, &common);
+  if (!numeric) {
+    st.SkipWithError("KLU factorization failed");
+    return;
+  }
+  Vec x(sc.n_dofs);
+  double t_asm = 0, t_fact = 0, t_solve = 0;
+  for (auto _ : st) {
+    const double t0 = thread_cpu_seconds();
+    it.residual();
+    it.jacobian();
+    const double t1 = thread_cpu_seconds();
+    klu_l_refactor(it.j.outerIndexPtr(), it.j.innerIndexPtr(), it.j.valuePtr(), symbolic, numeric,
+                   &common);
+    const double t2 = thread_cpu_seconds();
+    x = it.f;
+    klu_l_solve(symbolic, numeric, sc.n_dofs, 1, x.data(), &common);
+    benchmark::DoNotOptimize(x.data());
+    const double t3 = thread_cpu_seconds();
+    t_asm += t1 - t0;
+    t_fact += t2 - t1;
+    t_solve += t3 - t2;
+  }
+  klu_l_free_numeric(&numeric, &common);
+  klu_l_free_symbolic(&symbolic, &common);
+  using C = benchmark::Counter;
+  st.counters["asm_s"] = C(t_asm, C::kAvgIterations);
+  st.counters["fact_s"] = C(t_fact, C::kAvgIterations);
+  st.counters["solve_s"] = C(t_solve, C::kAvgIterations);
+  st.counters["dofs"] = sc.n_dofs;
+  set_rates(st, sc.n_elements, sc.n_dofs);
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -269,7 +393,25 @@ int main(int argc, char** argv) {
             ->ArgNames({"nx", "ny"})
             ->MinTime(min_time)
             ->Unit(benchmark::kMillisecond);
+        benchmark::RegisterBenchmark(("newton_slots/" + tail).c_str(), bm_newton_slots, model, kind)
+            ->Args({nx, ny})
+            ->ArgNames({"nx", "ny"})
+            ->MinTime(min_time)
+            ->Unit(benchmark::kMillisecond);
       }
+
+  for (const auto& [model, mname] : models)
+    for (GradientKind kind : kinds) {
+      const std::string tail = std::string(mname) + "/" + kind_name(kind);
+      benchmark::RegisterBenchmark(
+          ("floor/" + tail + "/ring_impact").c_str(),
+          [model = model, kind](benchmark::State& st) { bm_floor(st, ring_scene(model), kind); })
+          ->Unit(benchmark::kMicrosecond);
+      benchmark::RegisterBenchmark(
+          ("floor/" + tail + "/rectangle_15x15").c_str(),
+          [model = model, kind](benchmark::State& st) { bm_floor(st, scene(model, 15, 15), kind); })
+          ->Unit(benchmark::kMicrosecond);
+    }
 
   benchmark::RunSpecifiedBenchmarks();
   benchmark::Shutdown();

@@ -38,6 +38,7 @@ struct RunOptions {
   std::string out_dir;                 // empty: out/<scene name>-<scheme>
   std::vector<std::string> overrides;  // "key=value"
   bool quiet = false;
+  bool verbose = false;        // --verbose: every pseudo step of [statics] on stderr
   bool force = false;          // reuse an output folder holding files emdae did not write
   long checkpoint_every = 0;   // --checkpoint-every N: a checkpoint every N steps
   std::string resume_dir;      // --resume DIR: go on from DIR's checkpoint
@@ -53,6 +54,7 @@ struct CompareOptions {
   bool quiet = false;
   bool strict = false;  // a missed [tolerances] check exits 4 (otherwise 0)
   bool force = false;
+  int jobs = 0;  // schemes run at once, each on a thread; 0: the hardware threads
 };
 
 struct StudyOptions {
@@ -68,6 +70,10 @@ struct StudyOptions {
   std::string out_dir;                  // empty: out/<scene name>-study
   std::vector<std::string> overrides;
   bool quiet = false;
+  /// Runs at once, each on a thread of its own; 0: the hardware threads
+  /// (under mpirun: 1 per rank). The results are those of one run after the
+  /// other, whatever the number.
+  int jobs = 0;
 };
 
 int command_run(const RunOptions& options, std::ostream& out, std::ostream& err);
@@ -78,7 +84,8 @@ int command_run(const RunOptions& options, std::ostream& out, std::ostream& err)
 /// [tolerances] check (that is the comparison's finding, not its failure;
 /// with `strict` it is 4); otherwise the worst of the runs (a scheme that
 /// refuses the scene counts as a failed run, 3); bad input (scene, unknown
-/// scheme name) is 2 before anything runs.
+/// scheme name) is 2 before anything runs. The schemes run `jobs` at a
+/// time, and under mpirun shared among the ranks, rank 0 writing DIR.
 int command_compare(const CompareOptions& options, std::ostream& out, std::ostream& err);
 
 /// Runs the scene with scheme em at the reference step (and at twice it,
@@ -87,7 +94,10 @@ int command_compare(const CompareOptions& options, std::ostream& out, std::ostre
 /// Every run is checked (scene and stepper) before the first one starts: bad
 /// input is 2 with nothing written. A run that fails is recorded and the
 /// others still run; exit code: the worst of the runs (3 for a failure; the
-/// scene's [tolerances] are not checked), 130 when interrupted.
+/// scene's [tolerances] are not checked), 130 when interrupted. The runs go
+/// `jobs` at a time, and under mpirun shared among the ranks, rank 0
+/// gathering them and writing DIR; the figures are those of one run after
+/// the other, but the CPU seconds.
 int command_study(const StudyOptions& options, std::ostream& out, std::ostream& err);
 
 int command_check(const std::string& scene_path, const std::vector<std::string>& overrides,

@@ -85,6 +85,15 @@ void set_option(CLI::App* c, std::vector<std::string>& assignments,
       ->check(kNotEmpty);
 }
 
+void jobs_option(CLI::App* c, int& jobs, const char* cases) {
+  c->add_option("-j,--jobs", jobs,
+                std::string("Number of ") + cases +
+                    " to run at once, each on a thread of its own (default: the hardware "
+                    "threads; under mpirun: 1 per rank; 1: one after the other)")
+      ->type_name("N")
+      ->check(CLI::Range(1, 4096));
+}
+
 }  // namespace
 
 int emdae_main(int argc, char** argv) {
@@ -117,6 +126,9 @@ int emdae_main(int argc, char** argv) {
              "Override a scene value, e.g. --set time.dt=0.005 or "
              "--set 'particles[0].mass=2' (repeatable)");
   run->add_flag("-q,--quiet", run_options.quiet, "No progress lines and no summary table");
+  run->add_flag("-v,--verbose", run_options.verbose,
+                "Print every pseudo step of the [statics] solve to stderr (pseudo dt, change, "
+                "active contacts, Newton iterations and residual, cut-backs)");
   run->add_option("--checkpoint-every", run_options.checkpoint_every,
                   "Write the whole state of the run to DIR/checkpoint/ every N steps "
                   "(atomically), to go on with --resume after a crash or a kill")
@@ -144,6 +156,7 @@ int emdae_main(int argc, char** argv) {
   t_end_option(compare, compare_options.t_end);
   out_option(compare, compare_options.out_dir, "out/<scene name>-compare");
   set_option(compare, compare_options.overrides);
+  jobs_option(compare, compare_options.jobs, "schemes");
   compare->add_flag("-q,--quiet", compare_options.quiet, "No progress lines and no table");
   compare->add_flag("--strict", compare_options.strict,
                     "Exit 4 when a scheme misses a [tolerances] check of the scene (without it "
@@ -205,6 +218,7 @@ int emdae_main(int argc, char** argv) {
   t_end_option(study, study_options.t_end);
   out_option(study, study_options.out_dir, "out/<scene name>-study");
   set_option(study, study_options.overrides);
+  jobs_option(study, study_options.jobs, "runs");
   study->add_flag("-q,--quiet", study_options.quiet, "No progress lines and no table");
   study->footer(
       std::string(kExitCodesHelp) +
@@ -233,7 +247,14 @@ int emdae_main(int argc, char** argv) {
       "Every run is checked before the first starts (bad input: 2, nothing written). A\n"
       "run that fails is recorded and the others still run; the exit code is then 3\n"
       "(study.csv and study.json are rewritten after every run). The scene's\n"
-      "[tolerances] are not checked.");
+      "[tolerances] are not checked.\n"
+      "\n"
+      "Runs go --jobs at a time (the longest first), and under MPI across the ranks:\n"
+      "  mpirun -n 4 emdae study SCENE --schemes em,midpoint\n"
+      "shares them among 4 processes (on one machine or several); rank 0 gathers them\n"
+      "and alone writes DIR. The tables and the report are the same as one after the\n"
+      "other, but for the CPU times (each run's own thread's). With more than one run\n"
+      "at once, a run shows one line when it ends instead of a progress bar.");
 
   std::string check_path;
   std::vector<std::string> check_overrides;

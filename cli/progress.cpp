@@ -6,44 +6,54 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <csignal>
 #include <cstdlib>
 #include <iostream>
+#include <mutex>
 
 namespace emdae {
 
 namespace {
 
 // Set by SIGINT/SIGTERM; the time loop checks it between steps so that the
-// summary still gets written.
-volatile std::sig_atomic_t g_interrupted = 0;
+// summary still gets written. Atomic: the runs of a study or a comparison
+// read it from several threads.
+std::atomic<bool> g_interrupted{false};
+static_assert(std::atomic<bool>::is_always_lock_free, "read in a signal handler");
 
 void on_signal(int) {
-  g_interrupted = 1;
+  g_interrupted.store(true, std::memory_order_relaxed);
 }
+
+// The scopes that listen, and the handlers they replaced.
+std::mutex g_scopes_mutex;
+int g_scopes = 0;
+void (*g_old_int)(int) = SIG_DFL;
+void (*g_old_term)(int) = SIG_DFL;
 
 }  // namespace
 
-class SignalGuard {
- public:
-  SignalGuard() {
-    g_interrupted = 0;
-    old_int_ = std::signal(SIGINT, on_signal);
-    old_term_ = std::signal(SIGTERM, on_signal);
-  }
-  ~SignalGuard() {
-    std::signal(SIGINT, old_int_);
-    std::signal(SIGTERM, old_term_);
-  }
-  SignalGuard(const SignalGuard&) = delete;
-  SignalGuard& operator=(const SignalGuard&) = delete;
+InterruptScope::InterruptScope() {
+  std::lock_guard<std::mutex> lock(g_scopes_mutex);
+  if (g_scopes++ > 0) return;
+  g_interrupted.store(false);
+  g_old_int = std::signal(SIGINT, on_signal);
+  g_old_term = std::signal(SIGTERM, on_signal);
+}
 
- private:
-  void (*old_int_)(int) = SIG_DFL;
-  void (*old_term_)(int) = SIG_DFL;
-};
+InterruptScope::~InterruptScope() {
+  std::lock_guard<std::mutex> lock(g_scopes_mutex);
+  if (--g_scopes > 0) return;
+  std::signal(SIGINT, g_old_int);
+  std::signal(SIGTERM, g_old_term);
+}
+
+bool InterruptScope::requested() {
+  return g_interrupted.load(std::memory_order_relaxed);
+}
 
 // Progress of a run on stderr. On a terminal: one line redrawn in place
 // (\r, then erase to the end of the line) at most ten times a second, with
@@ -139,7 +149,7 @@ ConsoleObserver::ConsoleObserver(std::ostream& err, bool quiet, std::string labe
   // From the start, not from the time loop's: Ctrl-C during a static
   // analysis (or the equilibrium before a dynamic run) stops the run between
   // load increments, keeping history and summary.
-  signals_ = std::make_unique<SignalGuard>();
+  signals_ = std::make_unique<InterruptScope>();
 }
 
 ConsoleObserver::~ConsoleObserver() = default;
@@ -153,7 +163,7 @@ void ConsoleObserver::sampled(const State&, const Sample& sample, const Recorder
 }
 
 bool ConsoleObserver::interrupted() {
-  return signals_ && g_interrupted;
+  return signals_ && InterruptScope::requested();
 }
 
 void ConsoleObserver::warned(const std::string& message) {

@@ -12,7 +12,19 @@
 namespace emdae {
 
 class Progress;
-class SignalGuard;
+
+/// Listens to SIGINT and SIGTERM while at least one scope exists (a
+/// command's, each run's; on any thread): the first clears the flag and
+/// installs the handlers, the last puts back the ones it found.
+class InterruptScope {
+ public:
+  InterruptScope();
+  ~InterruptScope();
+  InterruptScope(const InterruptScope&) = delete;
+  InterruptScope& operator=(const InterruptScope&) = delete;
+  /// A signal arrived since the first of the current scopes began.
+  static bool requested();
+};
 
 /// The run's observer on a console: progress (unless quiet), warnings as
 /// "emdae: warning: ...", interruption by SIGINT/SIGTERM during the time loop.
@@ -31,7 +43,7 @@ class ConsoleObserver final : public RunObserver {
   bool quiet_;
   std::string label_;
   std::unique_ptr<Progress> progress_;
-  std::unique_ptr<SignalGuard> signals_;
+  std::unique_ptr<InterruptScope> signals_;
 };
 
 }  // namespace emdae

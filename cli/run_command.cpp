@@ -109,6 +109,7 @@ int run_scene(const RunOptions& options, std::ostream& out, std::ostream& err, R
           ? "out/" + settings.name + "-" + (settings.static_only ? "static" : settings.scheme)
           : options.out_dir;
   settings.force = options.force;
+  settings.statics.settings.verbose = options.verbose;
   settings.checkpoint_every = options.checkpoint_every;
   settings.resume = !options.resume_dir.empty();
   if (options.checkpoint_every > 0) settings.resume_note = resume_note(options);
@@ -131,7 +132,8 @@ int run_scene(const RunOptions& options, std::ostream& out, std::ostream& err, R
   const Summary& summary = result.summary;
   int code = exit_code(result);
   if (!options.quiet || code != kExitOk)
-    print_summary(out, summary, settings.out_dir, result.fields, result.contact_table);
+    print_summary(out, summary, settings.out_dir, result.fields, result.contact_table,
+                  result.trajectories);
   if (code == kExitChecksFailed)
     for (const auto& c : summary.checks)
       if (c.result == "fail")
@@ -180,6 +182,7 @@ int resume(const RunOptions& given, std::ostream& out, std::ostream& err, RunRec
                                       note.string(), e.what()));
   }
   o.quiet = given.quiet;
+  o.verbose = given.verbose;
   o.progress_label = given.progress_label;
   o.resume_dir = given.resume_dir;
   return run_scene(o, out, err, record);

@@ -9,10 +9,16 @@
 #include <cstdlib>
 #include <filesystem>
 #include <limits>
+#include <mutex>
+#include <numeric>
+#include <sstream>
 
+#include "cli/cluster.hpp"
 #include "cli/command_support.hpp"
+#include "cli/parallel.hpp"
 #include "cli/progress.hpp"
 #include "run/describe.hpp"
+#include "verify/binary_io.hpp"
 #include "verify/study.hpp"
 #include "verify/study_measures.hpp"
 
@@ -217,10 +223,43 @@ std::string list_text(const std::vector<double>& values) {
   return out;
 }
 
+// A run's result on its way from a rank of an MPI job to rank 0: the run's
+// index in the plan, its exit code (kNotRun: never started), what it wrote
+// to err, and the run itself.
+constexpr int kNotRun = -1;
+
+std::string result_message(int index, int code, const std::string& text, const StudyRun& run) {
+  std::ostringstream out(std::ios::binary);
+  binary::put<std::int32_t>(out, index);
+  binary::put<std::int32_t>(out, code);
+  binary::put_string(out, text);
+  save_run(out, run);
+  return out.str();
+}
+
+int read_result_message(const std::string& bytes, int n_runs, int& code, std::string& text,
+                        StudyRun& run) {
+  std::istringstream in(bytes, std::ios::binary);
+  const int index = binary::get<std::int32_t>(in);
+  if (index < 0 || index >= n_runs)
+    throw std::runtime_error(fmt::format("a rank sent the result of run {} of {}", index, n_runs));
+  code = binary::get<std::int32_t>(in);
+  text = binary::get_string(in);
+  run = load_run(in);
+  return index;
+}
+
 }  // namespace
 
-int command_study(const StudyOptions& options, std::ostream& out, std::ostream& err) {
-  const auto refuse = [&err](const std::string& message) { return bad_input(err, message); };
+int command_study(const StudyOptions& options, std::ostream& out, std::ostream& console_err) {
+  // Under MPI every rank checks everything as rank 0 does, but only rank 0
+  // speaks: the others hold their text, and show it only when rank 0 had
+  // no complaint of its own.
+  const bool root = cluster::rank() == 0;
+  std::ostringstream held;
+  std::ostream& err = root ? console_err : held;
+  const auto agreed = [&](int code) { return cluster::settle(code, held.str(), console_err); };
+  const auto refuse = [&](const std::string& message) { return agreed(bad_input(err, message)); };
   // Everything is checked before anything runs or is written: the scene, the
   // lists, and every run of the study as its scene and stepper.
   const std::vector<SceneOverride> base =
@@ -354,10 +393,19 @@ int command_study(const StudyOptions& options, std::ostream& out, std::ostream& 
 
   const std::string dir =
       options.out_dir.empty() ? "out/" + scene->settings.name + "-study" : options.out_dir;
-  try {
-    create_output_folder(dir);
-  } catch (const OutputError& e) {
-    return refuse(e.what());
+  const bool made_here = root && !fs::exists(dir);
+  if (root) {  // the other ranks of an MPI job write nothing
+    try {
+      create_output_folder(dir);
+    } catch (const OutputError& e) {
+      return refuse(e.what());
+    }
+  }
+  if (const int code = agreed(kExitOk); code != kExitOk) {
+    // Another rank refused: nothing written, the folder made for it neither.
+    std::error_code ec;
+    if (made_here) fs::remove(dir, ec);
+    return code;
   }
 
   Study study;
@@ -377,12 +425,14 @@ int command_study(const StudyOptions& options, std::ostream& out, std::ostream& 
   for (std::size_t i = first_run; i < plan.size(); ++i) study.runs.push_back(plan[i].run);
   study.families = families;
   study.groups = node_groups(*scene->model);
-  // Until the reference has run, the times positions may be compared at:
-  // the given ones, or a grid of the largest step the default ones are
-  // chosen from (where every run with a step dividing it lands exactly).
+  // The times a run takes its positions at: the given ones; or, until the
+  // reference has ended, a grid of the largest step the default ones are
+  // chosen from (where every run with a step dividing it lands exactly),
+  // and once it has, the chosen ones (runs that start then keep less).
   const double largest_step = has_steps ? dts.front() : scene_dt;
   const std::vector<double> grid = capture_grid(largest_step, t_end);
   std::vector<double> capture = given_times ? *given_times : grid;
+  std::mutex capture_mutex;  // set by the calling thread, read by the workers
 
   ReportInfo info = report_info(*scene->model, scene->settings);
   info.scheme.clear();
@@ -416,51 +466,149 @@ int command_study(const StudyOptions& options, std::ostream& out, std::ostream& 
   info.settings.insert(info.settings.begin(), varied.begin(), varied.end());
   scene.reset();  // each run loads its own
 
-  // The runs, one after the other; the tables are rewritten after each, so
-  // that an interrupted or crashed study keeps what it did.
+  // The runs: one after the other, or --jobs at a time (the longest
+  // first), and under MPI shared among the ranks. A run that starts before
+  // the reference has ended takes the positions on the whole grid
+  // (`capture`); once the chosen times are known it keeps those alone, as
+  // the reference does. A position at a time is interpolated from the same
+  // two states whatever other times are taken, so the figures do not depend
+  // on the order the runs start and end in. The tables are rewritten after each, so that an
+  // interrupted or crashed study keeps what it did.
+  const int n_runs = static_cast<int>(plan.size());
+  const int n_ranks = cluster::size();
+  const int jobs = options.jobs > 0 ? options.jobs : n_ranks > 1 ? 1 : default_jobs();
+  const bool one_at_a_time = jobs == 1 && n_ranks == 1;
+  std::vector<double> cost;  // estimated: the steps (ida: its output steps by tolerance)
+  for (const auto& p : plan)
+    cost.push_back(p.run.tol ? t_end / scene_dt * std::max(1.0, -std::log10(*p.run.tol) / 2)
+                             : t_end / p.run.dt);
+  std::vector<int> cases(plan.size());
+  std::iota(cases.begin(), cases.end(), 0);
+  if (!one_at_a_time) cases = share_cases(cost, n_ranks, cluster::rank());
+  std::vector<StudyRun> results;  // each written by the thread that runs it
+  for (const auto& p : plan) results.push_back(p.run);
+  std::vector<int> codes(plan.size(), kNotRun);
+  const std::vector<NodeGroup> groups = study.groups;
+  const auto slot = [&](int i) -> StudyRun& {
+    return i == 0                            ? study.reference
+           : i < static_cast<int>(first_run) ? study.reference_check
+                                             : study.runs[static_cast<std::size_t>(i) - first_run];
+  };
+  std::vector<char> arrived(plan.size(), 0);
+  const auto keep_chosen = [&](int i) {
+    StudyRun& run = slot(i);
+    if (run.q_end.size() == 0) return;  // no positions taken: the run did not get to t_end
+    keep_positions(run.measured, study.times);
+  };
+
+  CaseWork work;
+  work.err = &err;
+  work.hold_text = !root;
+  work.run = [&](int i, std::ostream& case_err) {
+    const auto k = static_cast<std::size_t>(i);
+    std::vector<double> times;
+    {
+      std::lock_guard<std::mutex> lock(capture_mutex);
+      times = capture;
+    }
+    codes[k] = study_run(options.scene_path, plan[k].overrides, plan[k].label,
+                         options.quiet || !one_at_a_time, times, groups, case_err, results[k]);
+  };
   int exit_code = kExitOk;
   bool interrupted = false;
-  try {
-    for (std::size_t i = 0; i < plan.size(); ++i) {
-      StudyRun& run = i == 0          ? study.reference
-                      : i < first_run ? study.reference_check
-                                      : study.runs[i - first_run];
-      const int code = study_run(options.scene_path, plan[i].overrides, plan[i].label,
-                                 options.quiet, capture, study.groups, err, run);
-      if (i == 0 && run.ok()) {
-        // The times and the measures, from what the reference gave.
-        RunMeasures& ref = run.measured;
-        if (given_times) {
-          for (double t : *given_times)
-            study.times.push_back(
-                {t, std::abs(t - t_end) <= 1e-9 * std::max(1.0, t_end) ? "t_end" : "given"});
-        } else {
-          study.times =
-              default_times(grid, t_end, ref.contact_first, ref.contact_last, largest_step);
-        }
-        keep_positions(ref, study.times);
+  // On rank 0: a run has ended, here or on another rank.
+  const auto gather = [&](int i, const std::string& text) {
+    const auto k = static_cast<std::size_t>(i);
+    err << text;
+    arrived[k] = 1;
+    const int code = codes[k];
+    StudyRun& run = slot(i);
+    run = std::move(results[k]);
+    if (code == kNotRun) return true;  // an interrupted rank never started it
+    if (i == 0 && run.ok()) {
+      // The times and the measures, from what the reference gave.
+      RunMeasures& ref = run.measured;
+      if (given_times) {
+        for (double t : *given_times)
+          study.times.push_back(
+              {t, std::abs(t - t_end) <= 1e-9 * std::max(1.0, t_end) ? "t_end" : "given"});
+      } else {
+        study.times = default_times(grid, t_end, ref.contact_first, ref.contact_last, largest_step);
+      }
+      keep_chosen(0);
+      {
+        std::lock_guard<std::mutex> lock(capture_mutex);
         capture = ref.times;
-        study.measures = define_measures(families, study.times, study.groups, ref, study.size,
-                                         t_end, contact, study.dimension);
       }
-      if (!options.quiet)
-        fmt::print(err, "emdae: {}: {} ({} steps, {:.3f} s)\n", plan[i].label, run.status,
-                   run.steps, run.cpu_seconds);
-      else if (!run.ok())
-        fmt::print(err, "emdae: {}: {}\n", plan[i].label, run.status);
-      evaluate_study(study);
-      write_study_tables(dir, study);
-      if (code == kExitInterrupted) {
-        interrupted = true;
-        break;
-      }
-      exit_code = worse(exit_code, code);
+      study.measures = define_measures(families, study.times, study.groups, ref, study.size, t_end,
+                                       contact, study.dimension);
+      for (int j = 1; j < n_runs; ++j)
+        if (arrived[static_cast<std::size_t>(j)]) keep_chosen(j);
+    } else if (i != 0 && !study.times.empty()) {
+      keep_chosen(i);
+    }
+    if (!options.quiet)
+      fmt::print(err, "emdae: {}: {} ({} steps, {:.3f} s)\n", plan[k].label, run.status, run.steps,
+                 run.cpu_seconds);
+    else if (!run.ok())
+      fmt::print(err, "emdae: {}: {}\n", plan[k].label, run.status);
+    evaluate_study(study);
+    write_study_tables(dir, study);
+    if (code == kExitInterrupted) {
+      interrupted = true;
+      return false;
+    }
+    exit_code = worse(exit_code, code);
+    return true;
+  };
+  std::vector<char> sent(plan.size(), 0);
+  if (root) {
+    work.finished = gather;
+    if (n_ranks > 1) {
+      work.n_elsewhere = n_runs - static_cast<int>(cases.size());
+      work.poll = [&](std::string& text) {
+        std::string bytes;
+        if (!cluster::receive(bytes)) return -1;
+        int code = kNotRun;
+        StudyRun run;
+        const int i = read_result_message(bytes, n_runs, code, text, run);
+        codes[static_cast<std::size_t>(i)] = code;
+        results[static_cast<std::size_t>(i)] = std::move(run);
+        return i;
+      };
+    }
+  } else {
+    // Another rank: each run, as it ends, goes to rank 0.
+    work.finished = [&](int i, const std::string& text) {
+      const auto k = static_cast<std::size_t>(i);
+      cluster::send(result_message(i, codes[k], text, results[k]));
+      sent[k] = 1;
+      return codes[k] != kExitInterrupted;
+    };
+  }
+
+  // The whole study hears Ctrl-C, also between two runs.
+  InterruptScope listening;
+  try {
+    if (!one_at_a_time && !options.quiet && root)
+      fmt::print(err, "emdae: study: {} runs, {} at a time{}\n", n_runs, jobs,
+                 n_ranks > 1 ? fmt::format(" on each of {} MPI ranks", n_ranks) : "");
+    run_cases(cases, jobs, work);
+    if (!root) {
+      // Those it never started (interrupted): rank 0 waits for every run.
+      for (int i : cases)
+        if (!sent[static_cast<std::size_t>(i)])
+          cluster::send(result_message(i, kNotRun, "", results[static_cast<std::size_t>(i)]));
+      return kExitOk;  // rank 0 says how the study went
     }
     study.complete = !interrupted;
     write_study_tables(dir, study);
     write_study_report(dir, info, study);
   } catch (const std::exception& e) {
-    fmt::print(err, "emdae: error: {}\n", e.what());
+    fmt::print(console_err, "emdae: error: {}{}\n",
+               n_ranks > 1 ? fmt::format("rank {}: ", cluster::rank()) : "", e.what());
+    // Under MPI no rank may be left waiting for a message.
+    if (n_ranks > 1) cluster::abort(kExitInternal);
     return kExitInternal;
   }
   if (!options.quiet || exit_code != kExitOk) {

@@ -5,6 +5,7 @@ find_package(fmt REQUIRED)
 find_package(nlohmann_json 3.10 REQUIRED)
 find_package(tomlplusplus 3 REQUIRED)
 find_package(CLI11 2 REQUIRED)
+find_package(ZLIB REQUIRED)  # compressed VTU fields (zlib1g-dev)
 
 # SUNDIALS 6.4 (KINSOL, IDA, sparse matrix; SUNDIALS::KLU: the KLU it was built with). Debian's config
 # file lists targets for every optional module; we use the shared libraries.
@@ -39,6 +40,28 @@ add_library(emdae::umfpack INTERFACE IMPORTED)
 set_target_properties(emdae::umfpack PROPERTIES
   INTERFACE_INCLUDE_DIRECTORIES "${UMFPACK_INCLUDE_DIR}"
   INTERFACE_LINK_LIBRARIES "${UMFPACK_LIBRARY}")
+find_package(Threads REQUIRED)
+# MPI (Open MPI from Debian), optional: `mpirun -n N emdae study ...` shares
+# a study's runs among the ranks. Without it the build works and a study
+# runs in one process (on several threads). The sanitize preset turns it
+# off: LeakSanitizer reports what Open MPI's MPI_Init keeps allocated.
+option(EMDAE_MPI "Use MPI for studies across processes and machines, when found" ON)
+if(EMDAE_MPI)
+  # FindMPI looks for MPI's C interface with a C compiler.
+  include(CheckLanguage)
+  check_language(C)
+  if(CMAKE_C_COMPILER)
+    enable_language(C)
+    find_package(MPI COMPONENTS C)
+  endif()
+endif()
+if(EMDAE_MPI AND MPI_C_FOUND)
+  set(EMDAE_WITH_MPI ON)
+  message(STATUS "emdae: MPI found (${MPIEXEC_EXECUTABLE}): studies run across ranks")
+else()
+  set(EMDAE_WITH_MPI OFF)
+  message(STATUS "emdae: without MPI: studies run in one process")
+endif()
 
 if(EMDAE_BUILD_TESTS)
   find_package(GTest REQUIRED)

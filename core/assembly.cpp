@@ -1,5 +1,8 @@
 #include "core/assembly.hpp"
 
+#include <algorithm>
+#include <stdexcept>
+
 namespace emdae {
 
 Assembler::Assembler(const System& system, const std::vector<const Term*>& extra) : s_(system) {
@@ -33,6 +36,21 @@ void Assembler::add_potential_forces(GradientKind kind, const Vec& q0, const Vec
     const auto& dofs = term->dofs();
     for (std::size_t i = 0; i < dofs.size(); ++i) f[dofs[i]] += grad_[static_cast<Eigen::Index>(i)];
     if (jac) scatter_matrix(*term, jac_, jac_factor, *jac);
+  }
+}
+
+void Assembler::add_potential_jacobian(GradientKind kind, const Vec& q0, const Vec& q1, double t0,
+                                       double t1, double* values, const std::vector<long>& slots,
+                                       double jac_factor) {
+  std::size_t next = 0;
+  for (const auto& term : s_.potentials()) {
+    local(*term, kind, q0, q1, t0, t1, &jac_);
+    const std::size_t n = term->dofs().size();
+    const double* k = jac_.data();  // column-major, as the slots
+    const long* slot = slots.data() + next;
+    for (std::size_t e = 0; e < n * n; ++e)
+      if (slot[e] >= 0) values[slot[e]] += jac_factor * k[e];
+    next += n * n;
   }
 }
 
@@ -111,6 +129,71 @@ void Assembler::add_mass(Triplets& out, double factor, long offset) const {
     for (SparseMatrix::InnerIterator it(m, col); it; ++it)
       if (!fixed[static_cast<std::size_t>(it.row())])
         out.emplace_back(offset + it.row(), offset + col, factor * it.value());
+}
+
+namespace {
+
+// The slot of (row, col) in a compressed matrix with sorted inner indices.
+long slot_of(const SparseMatrix& m, long row, long col) {
+  const long* inner = m.innerIndexPtr();
+  const long* begin = inner + m.outerIndexPtr()[col];
+  const long* end = inner + m.outerIndexPtr()[col + 1];
+  const long* it = std::lower_bound(begin, end, row);
+  if (it == end || *it != row) throw std::logic_error("JacobianPattern: entry not in the pattern");
+  return it - inner;
+}
+
+}  // namespace
+
+bool JacobianPattern::prepare(const Triplets& t, const System& s, long size, SparseMatrix& j) {
+  bool same = size == size_ && t.size() == rows_.size();
+  for (std::size_t k = 0; same && k < t.size(); ++k)
+    same = t[k].row() == rows_[k] && t[k].col() == cols_[k];
+  if (!same) {
+    ++rebuilds_;
+    size_ = size;
+    rows_.resize(t.size());
+    cols_.resize(t.size());
+    Triplets all;
+    all.reserve(t.size());
+    for (std::size_t k = 0; k < t.size(); ++k) {
+      rows_[k] = t[k].row();
+      cols_[k] = t[k].col();
+      all.emplace_back(rows_[k], cols_[k], 0.0);
+    }
+    const auto& fixed = s.is_prescribed();
+    for (const auto& term : s.potentials())
+      for (int c : term->dofs())
+        for (int r : term->dofs())
+          if (!fixed[static_cast<std::size_t>(r)]) all.emplace_back(r, c, 0.0);
+    pattern_.resize(size, size);
+    pattern_.setFromTriplets(all.begin(), all.end());
+    pattern_.makeCompressed();
+    slots_.resize(t.size());
+    for (std::size_t k = 0; k < t.size(); ++k) slots_[k] = slot_of(pattern_, rows_[k], cols_[k]);
+    potential_slots_.clear();
+    for (const auto& term : s.potentials())
+      for (int c : term->dofs())
+        for (int r : term->dofs())
+          potential_slots_.push_back(fixed[static_cast<std::size_t>(r)] ? -1
+                                                                        : slot_of(pattern_, r, c));
+  }
+  // j may have been handed another matrix since (or be new): give it the
+  // pattern unless it has it already.
+  const long nnz = pattern_.nonZeros();
+  const bool has =
+      j.rows() == size && j.cols() == size && j.isCompressed() && j.nonZeros() == nnz &&
+      std::equal(pattern_.outerIndexPtr(), pattern_.outerIndexPtr() + size + 1,
+                 j.outerIndexPtr()) &&
+      std::equal(pattern_.innerIndexPtr(), pattern_.innerIndexPtr() + nnz, j.innerIndexPtr());
+  if (!has) j = pattern_;
+  std::fill(j.valuePtr(), j.valuePtr() + nnz, 0.0);
+  return !same;
+}
+
+void JacobianPattern::scatter(const Triplets& t, SparseMatrix& j) const {
+  double* values = j.valuePtr();
+  for (std::size_t k = 0; k < t.size(); ++k) values[slots_[k]] += t[k].value();
 }
 
 }  // namespace emdae

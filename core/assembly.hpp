@@ -38,6 +38,13 @@ class Assembler {
                              const Vec& lambda, Vec& f, Vec* phi, Triplets* jac, long lambda_col,
                              long phi_row, double jac_factor = 1.0, Vec* increment = nullptr);
 
+  /// Jacobian only (no force assembled): adds jac_factor * dG/dq1 of every
+  /// potential term straight into the compressed-column values `values`
+  /// at the slots of JacobianPattern::potential_slots() (free rows only).
+  void add_potential_jacobian(GradientKind kind, const Vec& q0, const Vec& q1, double t0, double t1,
+                              double* values, const std::vector<long>& slots,
+                              double jac_factor = 1.0);
+
   /// One term's gradient of `kind`, times `factor`, added to f and (with
   /// `jac`) jac_factor * factor * its Jacobian w.r.t. q1 as triplets, both
   /// only in the rows `rows` allows (all free rows when null; prescribed
@@ -70,6 +77,34 @@ class Assembler {
   Vec ql0_, ql1_, grad_;
   Mat jac_;
   TermWorkspace ws_;
+};
+
+/// The compressed-column pattern of a Jacobian made of a triplet list plus
+/// the potential terms' blocks (free rows), with each triplet's and each
+/// block entry's slot in the values array: made once per pattern, so that
+/// an iteration scatters values into the matrix instead of sorting triplets
+/// (setFromTriplets). The pattern is the triplets' (row, col) sequence: a
+/// list with another sequence (a new active set, a contact search, another
+/// size) rebuilds it; a list with the same one reuses it.
+class JacobianPattern {
+ public:
+  /// Makes `j` (size x size) the pattern of `t` plus the potential blocks of
+  /// `s`, all values zero; rebuilds the slots when t's sequence or the size
+  /// changed (returns true then).
+  bool prepare(const Triplets& t, const System& s, long size, SparseMatrix& j);
+  /// Adds the triplets' values at their slots (`t` as given to prepare).
+  void scatter(const Triplets& t, SparseMatrix& j) const;
+  /// Per potential term (system order) n_local^2 slots, column-major
+  /// (c * n_local + r); -1 for prescribed rows.
+  const std::vector<long>& potential_slots() const { return potential_slots_; }
+  long rebuilds() const { return rebuilds_; }
+
+ private:
+  long size_ = -1;
+  std::vector<long> rows_, cols_;  // the triplet sequence the slots are for
+  std::vector<long> slots_, potential_slots_;
+  SparseMatrix pattern_;
+  long rebuilds_ = 0;
 };
 
 }  // namespace emdae

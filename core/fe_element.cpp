@@ -5,6 +5,8 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "core/gradient.hpp"
+
 namespace emdae {
 
 namespace {
@@ -191,6 +193,164 @@ void Q1Element::block_gradient(int block, const VecRef& pi, double, Eigen::Ref<V
 
 void Q1Element::block_hessian(int block, const VecRef& pi, double, Eigen::Ref<Mat> h) const {
   h = gp_[static_cast<std::size_t>(block)].weight * material_.energy_hessian(pi.head<3>());
+}
+
+// --- the fixed-size kernel ---------------------------------------------------
+// The formulas of invariants(), invariant_jacobian(), add_invariant_hessians()
+// and of core/gradient.cpp's exact and discrete gradients, one Gauss point (one
+// block of 3 invariants) at a time: Dpi of a point is 3 x 8, the block
+// Jacobian of the discrete gradient 3 x 3, so every product has fixed sizes
+// and nothing is allocated. The discrete gradient's correction follows
+// gradient.cpp's branches for a smooth f~ (the element's smoothness_between
+// is Smooth): none when |dpi| is at round-off, the quadrature of Hessian
+// differences in between, the direct quotient for large |dpi|.
+
+Eigen::Matrix2d Q1Element::point_f(const Vec8& q, int g) const {
+  const auto& dn = gp_[static_cast<std::size_t>(g)].dn;
+  Eigen::Matrix2d f = Eigen::Matrix2d::Zero();
+  for (int a = 0; a < 4; ++a) f += q.segment<2>(2 * a) * dn.row(a);
+  return f;
+}
+
+Eigen::Vector3d Q1Element::point_invariants(const Eigen::Matrix2d& f) const {
+  if (material_.small_strain()) return {f(0, 0) - 1.0, f(1, 1) - 1.0, f(0, 1) + f(1, 0)};
+  return {f.col(0).squaredNorm(), f.col(1).squaredNorm(), f.col(0).dot(f.col(1))};
+}
+
+Q1Element::Mat38 Q1Element::point_jacobian(const Eigen::Matrix2d& f, int g) const {
+  const auto& dn = gp_[static_cast<std::size_t>(g)].dn;
+  Mat38 d;
+  if (material_.small_strain()) {
+    for (int a = 0; a < 4; ++a) {
+      d(0, 2 * a) = dn(a, 0);
+      d(0, 2 * a + 1) = 0.0;
+      d(1, 2 * a) = 0.0;
+      d(1, 2 * a + 1) = dn(a, 1);
+      d(2, 2 * a) = dn(a, 1);
+      d(2, 2 * a + 1) = dn(a, 0);
+    }
+    return d;
+  }
+  for (int a = 0; a < 4; ++a)
+    for (int i = 0; i < 2; ++i) {
+      d(0, 2 * a + i) = 2.0 * f(i, 0) * dn(a, 0);
+      d(1, 2 * a + i) = 2.0 * f(i, 1) * dn(a, 1);
+      d(2, 2 * a + i) = dn(a, 0) * f(i, 1) + f(i, 0) * dn(a, 1);
+    }
+  return d;
+}
+
+void Q1Element::add_point_hessian(int g, const Eigen::Vector3d& w, Mat8& k) const {
+  if (material_.small_strain()) return;
+  const auto& dn = gp_[static_cast<std::size_t>(g)].dn;
+  Eigen::Matrix2d sw;
+  sw << w[0], 0.5 * w[2], 0.5 * w[2], w[1];
+  const Eigen::Matrix4d gab = 2.0 * dn * sw * dn.transpose();
+  for (int a = 0; a < 4; ++a)
+    for (int b = 0; b < 4; ++b) {
+      k(2 * a, 2 * b) += gab(a, b);
+      k(2 * a + 1, 2 * b + 1) += gab(a, b);
+    }
+}
+
+void Q1Element::exact_kernel(const Vec8& q, double jac_scale, Vec8& grad, Mat8* jac) const {
+  grad.setZero();
+  if (jac) jac->setZero();
+  for (int g = 0; g < kGaussPoints; ++g) {
+    const double w = gp_[static_cast<std::size_t>(g)].weight;
+    const Eigen::Matrix2d f = point_f(q, g);
+    const Eigen::Vector3d pi = point_invariants(f);
+    const Mat38 d = point_jacobian(f, g);
+    const Eigen::Vector3d gv = w * material_.energy_gradient(pi);
+    grad.noalias() += d.transpose() * gv;
+    if (!jac) continue;
+    const Mat38 hd = (w * material_.energy_hessian(pi)) * d;
+    jac->noalias() += d.transpose() * hd;
+    add_point_hessian(g, gv, *jac);
+  }
+  if (jac) *jac *= jac_scale;
+}
+
+void Q1Element::discrete_kernel(const Vec8& q0, const Vec8& q1, Vec8& grad, Mat8* jac) const {
+  const Vec8 q_mid = 0.5 * (q0 + q1);
+  const bool quadratic = material_.quadratic_in_invariants();
+  grad.setZero();
+  if (jac) jac->setZero();
+  for (int g = 0; g < kGaussPoints; ++g) {
+    const double w = gp_[static_cast<std::size_t>(g)].weight;
+    const Eigen::Matrix2d f0 = point_f(q0, g), f1 = point_f(q1, g);
+    const Eigen::Vector3d pi0 = point_invariants(f0), pi1 = point_invariants(f1);
+    const Eigen::Vector3d pim = 0.5 * (pi0 + pi1), dpi = pi1 - pi0;
+    const Mat38 d_mid = point_jacobian(point_f(q_mid, g), g);
+    const Eigen::Vector3d gm = w * material_.energy_gradient(pim);
+    Eigen::Matrix3d hm, bj;
+    if (jac) {
+      hm = w * material_.energy_hessian(pim);
+      bj = 0.5 * hm;
+    }
+    Eigen::Vector3d gt = gm;
+    const double d2 = quadratic ? 0.0 : dpi.squaredNorm();
+    if (d2 != 0.0) {
+      const double scale = std::max(pi0.norm(), pi1.norm());
+      const bool small = d2 <= std::pow(kDiscreteGradientThreshold * scale, 2);
+      const bool large = d2 > std::pow(kDiscreteGradientQuadratureThreshold * scale, 2);
+      if (!small) {
+        double c = 0.0;
+        if (large) {
+          const double e0 = w * material_.energy(pi0), e1 = w * material_.energy(pi1);
+          c = (e1 - e0 - gm.dot(dpi)) / d2;
+        } else {
+          // gradient.cpp: int_0^{1/2} (1/2 - r) dpi^T [H(pim + r dpi) - H(pim - r dpi)] dpi dr
+          // by 3-point Gauss-Legendre.
+          static const double kX[3] = {-std::sqrt(0.6), 0.0, std::sqrt(0.6)};
+          static const double kW[3] = {5.0 / 9.0, 8.0 / 9.0, 5.0 / 9.0};
+          double numerator = 0.0;
+          for (int k = 0; k < 3; ++k) {
+            const double r = 0.25 * (1.0 + kX[k]);
+            const Eigen::Matrix3d dh = w * material_.energy_hessian(pim + r * dpi) -
+                                       w * material_.energy_hessian(pim - r * dpi);
+            numerator += 0.25 * kW[k] * (0.5 - r) * dpi.dot(dh * dpi);
+          }
+          c = numerator / d2;
+        }
+        gt += c * dpi;
+        if (jac) {
+          const Eigen::Vector3d g1 = w * material_.energy_gradient(pi1);
+          const Eigen::Vector3d dc = (g1 - 0.5 * hm * dpi - gm - 2.0 * c * dpi) / d2;
+          bj += dpi * dc.transpose();
+          bj.diagonal().array() += c;
+        }
+      }
+    }
+    grad.noalias() += d_mid.transpose() * gt;
+    if (!jac) continue;
+    const Mat38 bd = bj * point_jacobian(f1, g);
+    jac->noalias() += d_mid.transpose() * bd;
+    add_point_hessian(g, 0.5 * gt, *jac);
+  }
+}
+
+bool Q1Element::fixed_gradient(GradientKind kind, const Vec& q0, const Vec& q1, double, double,
+                               Vec& grad, Mat* jac) const {
+  if (q0.size() != 8 || q1.size() != 8) return false;
+  const Eigen::Map<const Vec8> a(q0.data()), b(q1.data());
+  Vec8 g;
+  Mat8 k;
+  Mat8* kp = jac ? &k : nullptr;
+  switch (kind) {
+    case GradientKind::Exact:
+      exact_kernel(b, 1.0, g, kp);
+      break;
+    case GradientKind::Midpoint:
+      exact_kernel(0.5 * (a + b), 0.5, g, kp);
+      break;
+    case GradientKind::Discrete:
+      discrete_kernel(a, b, g, kp);
+      break;
+  }
+  grad = g;
+  if (jac) *jac = k;
+  return true;
 }
 
 double Q1Element::area() const {

@@ -66,6 +66,11 @@ class Q1Element final : public Term {
   PathSmoothness smoothness_between(int, const VecRef&, const VecRef&) const override {
     return PathSmoothness::Smooth;
   }
+  /// The element's own kernel for every gradient kind and material: the
+  /// generic path's formulas (core/gradient.hpp) with 8 x 8 and 3 x 8
+  /// matrices of fixed size, Gauss point by Gauss point, no allocation.
+  bool fixed_gradient(GradientKind kind, const Vec& q0, const Vec& q1, double t0, double t1,
+                      Vec& grad, Mat* jac) const override;
   std::string describe() const override;
 
   const Material& material() const { return material_; }
@@ -85,6 +90,18 @@ class Q1Element final : public Term {
     Eigen::Matrix<double, 4, 2> dn;  // row A: grad_X N_A
     double weight = 0.0;             // w_gp J0_gp
   };
+  using Vec8 = Eigen::Matrix<double, 8, 1>;
+  using Mat8 = Eigen::Matrix<double, 8, 8>;
+  using Mat38 = Eigen::Matrix<double, 3, 8>;
+  // F, pi and Dpi of Gauss point g (fixed sizes).
+  Eigen::Matrix2d point_f(const Vec8& q, int g) const;
+  Eigen::Vector3d point_invariants(const Eigen::Matrix2d& f) const;
+  Mat38 point_jacobian(const Eigen::Matrix2d& f, int g) const;
+  // k += sum_k w_k A_k of Gauss point g.
+  void add_point_hessian(int g, const Eigen::Vector3d& w, Mat8& k) const;
+  void exact_kernel(const Vec8& q, double jac_scale, Vec8& grad, Mat8* jac) const;
+  void discrete_kernel(const Vec8& q0, const Vec8& q1, Vec8& grad, Mat8* jac) const;
+
   std::array<GaussPoint, kGaussPoints> gp_;
   Material material_;
   int index_;

@@ -55,8 +55,11 @@ void discrete_gradient(const Term& term, const Vec& q0, const Vec& q1, double t0
   const bool quadratic = term.quadratic_in_invariants();
   ws.g_tilde.resize(n_inv);
   if (jac) ws.block_jac.setZero(n_inv, n_inv);
-  Vec g1(m), gm(m), pi_q(m);
-  Mat hm(m, m), h_plus(m, m), h_minus(m, m);
+  // Per-block scratch from the workspace: no allocation once it has the size.
+  for (Vec* v : {&ws.g1, &ws.gm, &ws.pi_q, &ws.dc}) v->resize(m);
+  for (Mat* h : {&ws.hm, &ws.h_plus, &ws.h_minus}) h->resize(m, m);
+  Vec &g1 = ws.g1, &gm = ws.gm, &pi_q = ws.pi_q, &dc = ws.dc;
+  Mat &hm = ws.hm, &h_plus = ws.h_plus, &h_minus = ws.h_minus;
   for (int b = 0; b < term.n_blocks(); ++b) {
     const auto pim = ws.pim.segment(b * m, m);
     const auto dpi = ws.dpi.segment(b * m, m);
@@ -129,7 +132,7 @@ void discrete_gradient(const Term& term, const Vec& q0, const Vec& q1, double t0
     ws.g_tilde.segment(b * m, m) += c * dpi;
     if (jac) {
       term.block_gradient(b, ws.pi1.segment(b * m, m), tm, g1);
-      const Vec dc = (g1 - 0.5 * hm * dpi - gm - 2.0 * c * dpi) / d2;
+      dc = (g1 - 0.5 * hm * dpi - gm - 2.0 * c * dpi) / d2;
       auto gjac = ws.block_jac.block(b * m, b * m, m, m);
       gjac += dpi * dc.transpose();
       gjac.diagonal().array() += c;
@@ -147,6 +150,12 @@ void discrete_gradient(const Term& term, const Vec& q0, const Vec& q1, double t0
 
 void term_gradient(const Term& term, GradientKind kind, const Vec& q0, const Vec& q1, double t0,
                    double t1, Vec& grad, Mat* jac, TermWorkspace& ws) {
+  if (term.fixed_gradient(kind, q0, q1, t0, t1, grad, jac)) return;
+  generic_term_gradient(term, kind, q0, q1, t0, t1, grad, jac, ws);
+}
+
+void generic_term_gradient(const Term& term, GradientKind kind, const Vec& q0, const Vec& q1,
+                           double t0, double t1, Vec& grad, Mat* jac, TermWorkspace& ws) {
   switch (kind) {
     case GradientKind::Exact:
       exact_gradient(term, q1, t1, 1.0, grad, jac, ws);

@@ -40,8 +40,6 @@
 
 namespace emdae {
 
-enum class GradientKind { Exact, Midpoint, Discrete };
-
 inline constexpr double kDiscreteGradientThreshold = 1e-7;
 inline constexpr double kDiscreteGradientQuadratureThreshold = 1e-2;
 
@@ -49,13 +47,25 @@ inline constexpr double kDiscreteGradientQuadratureThreshold = 1e-2;
 struct TermWorkspace {
   Vec q_mid, pi0, pi1, pim, g, dpi, g_tilde;
   Mat dpi_mid, dpi_1, block_jac, h;
+  // Per block of the discrete gradient (block_size long).
+  Vec g1, gm, pi_q, dc;
+  Mat hm, h_plus, h_minus;
 };
 
 /// Gradient of `term` of the requested kind between local states q0 (t0) and
 /// q1 (t1); for Exact only q1, t1 are used. If `jac` is non-null it receives
-/// d grad / d q1 (n_local x n_local).
+/// d grad / d q1 (n_local x n_local). A term with its own kernel
+/// (Term::fixed_gradient: the Q1 element) computes it there, else the
+/// generic path below does.
 void term_gradient(const Term& term, GradientKind kind, const Vec& q0, const Vec& q1, double t0,
                    double t1, Vec& grad, Mat* jac, TermWorkspace& ws);
+
+/// The same, always through the generic Term description (invariants, Dpi,
+/// block functions with dynamic sizes), never a term's own kernel
+/// (Term::fixed_gradient): the reference a fixed-size kernel is tested
+/// against.
+void generic_term_gradient(const Term& term, GradientKind kind, const Vec& q0, const Vec& q1,
+                           double t0, double t1, Vec& grad, Mat* jac, TermWorkspace& ws);
 
 /// Gathers the term's local vector from a global one.
 void gather(const Term& term, const Vec& global, Vec& local);

@@ -140,6 +140,19 @@ class DeadLoad final : public Load {
     }
     return g_(t) * m;
   }
+  // Fixed direction and distribution: an axis is pushed when the forces
+  // along it do not sum to zero (relative to their size).
+  std::vector<bool> resultant_axes(int dim) const override {
+    std::vector<double> sum(dim, 0.0), size(dim, 0.0);
+    for (std::size_t i = 0; i < dofs_.size(); ++i) {
+      const double fi = forces_[static_cast<Eigen::Index>(i)];
+      sum[dofs_[i] % dim] += fi;
+      size[dofs_[i] % dim] += std::abs(fi);
+    }
+    std::vector<bool> out(dim);
+    for (int d = 0; d < dim; ++d) out[d] = std::abs(sum[d]) > 1e-14 * size[d];
+    return out;
+  }
 
  private:
   std::vector<int> dofs_;
@@ -189,6 +202,8 @@ class Torque final : public Load {
   }
 
   double moment(const Vec&, double t) const override { return torque_(t); }
+  // The forces sum to zero: no axis is pushed.
+  std::vector<bool> resultant_axes(int dim) const override { return std::vector<bool>(dim, false); }
 
  private:
   std::vector<int> nodes_;

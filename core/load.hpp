@@ -61,6 +61,10 @@ class Load {
                          const std::vector<bool>& fixed) const = 0;
   /// The resultant moment about the origin of the load at (q, t) (2D: z).
   virtual double moment(const Vec& q, double t) const = 0;
+  /// Per axis (dim of them): whether the load's resultant along it can be
+  /// non-zero, i.e. whether it can change that component of the linear
+  /// momentum. Unknown: every axis.
+  virtual std::vector<bool> resultant_axes(int dim) const { return std::vector<bool>(dim, true); }
 };
 
 /// Nodal forces fixed in direction and distribution, scaled by g(t):

@@ -143,6 +143,19 @@ void Model::add_anchor(const std::string& particle, const Vec& point, double len
   system_->add_constraint(make_anchor_link(*system_, p.node, point, l));
 }
 
+void Model::add_moving_anchor(const std::string& particle, const AnchorPath& path, double length) {
+  const Particle& p = checked_particle(particle, "particle");
+  if (p.fixed) throw ModelError("particle", "an anchor on a fixed particle constrains nothing");
+  if (anchored_.count(p.node))
+    throw ModelError("particle", "'" + particle +
+                                     "' is anchored already (a second rigid link would be "
+                                     "redundant)");
+  const double l = rigid_length(length, (p.position - path.position(0.0)).norm(),
+                                "'" + particle + "' and its anchor point at t = 0");
+  anchored_.insert(p.node);
+  system_->add_constraint(make_moving_anchor_link(*system_, p.node, path, l));
+}
+
 void Model::add_anchors(const std::string& nodes, const Vec& point) {
   const System& s = *system_;
   const std::vector<int> list = this->nodes(nodes);

@@ -138,6 +138,9 @@ class Model {
   void add_link(const std::string& a, const std::string& b, double length = 0.0);
   /// A rigid link of a particle to a fixed point.
   void add_anchor(const std::string& particle, const Vec& point, double length = 0.0);
+  /// A rigid link of a particle to a point moving on `path` (a driven
+  /// support); length <= 0: the distance to path.position(0).
+  void add_moving_anchor(const std::string& particle, const AnchorPath& path, double length = 0.0);
   /// A rigid link of every node of a node set to a fixed point, each at its
   /// initial distance: radial rollers about the point.
   void add_anchors(const std::string& nodes, const Vec& point);

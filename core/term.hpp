@@ -41,6 +41,9 @@ struct Symmetry {
 
 enum class PathSmoothness { Smooth, Kink, Unknown };
 
+/// Which gradient of a term a stepper asks for (core/gradient.hpp).
+enum class GradientKind { Exact, Midpoint, Discrete };
+
 class Term {
  public:
   /// @param dofs global dof indices, in the order of the local vector q.
@@ -83,14 +86,56 @@ class Term {
                                             const VecRef& /*pi1*/) const {
     return PathSmoothness::Unknown;
   }
+  /// A term's own kernel for term_gradient() (core/gradient.hpp): the same
+  /// gradient of `kind` between q0 and q1 and, with `jac`, its Jacobian
+  /// w.r.t. q1, equal to the generic path's up to round-off, computed with
+  /// fixed sizes and without allocation. Returns false (the default) when
+  /// the term has none; the generic path is then taken.
+  virtual bool fixed_gradient(GradientKind /*kind*/, const Vec& /*q0*/, const Vec& /*q1*/,
+                              double /*t0*/, double /*t1*/, Vec& /*grad*/, Mat* /*jac*/) const {
+    return false;
+  }
   /// True when f depends on time explicitly (driven constraints, loads).
   virtual bool depends_on_time() const { return false; }
+
+  // --- explicit time derivatives (driven constraints) -----------------------
+  // For a term with depends_on_time(), the partial derivatives of f~_b in t
+  // at fixed pi: IDA's velocity constraint G v + Phi_t = 0 and its consistent
+  // start (which also needs G_t = d/dt grad Phi and Phi_tt) and the
+  // generalized-alpha velocity constraint use them. A term that does not
+  // supply them returns false here, and value_t(), gradient_t() and
+  // value_tt() below fall back to central differences of f in t (errors
+  // ~1e-10 and ~1e-8: enough for IDA at tolerances down to about 1e-9, not
+  // below).
+  virtual bool has_time_derivatives() const { return false; }
+  /// d f~_b / dt at fixed pi (called only when has_time_derivatives()).
+  virtual double block_value_t(int block, const VecRef& pi, double t) const;
+  /// grad_pi (d f~_b / dt), length block_size().
+  virtual void block_gradient_t(int block, const VecRef& pi, double t, Eigen::Ref<Vec> g) const;
+  /// d2 f~_b / dt2 at fixed pi.
+  virtual double block_value_tt(int block, const VecRef& pi, double t) const;
   virtual Symmetry symmetry() const { return {}; }
+  /// Per axis (dim of them): whether a translation along that axis alone
+  /// leaves the term unchanged, so that it cannot change that component of
+  /// the linear momentum (a weight along y leaves x free). Default: every
+  /// axis as symmetry().translation says.
+  virtual std::vector<bool> translation_axes(int dim) const {
+    return std::vector<bool>(static_cast<std::size_t>(dim), symmetry().translation);
+  }
   /// What the term is, for messages and `emdae check`.
   virtual std::string describe() const = 0;
 
   /// f(q) at time t.
   double value(const Vec& q, double t) const;
+  /// df/dt (q, t) at fixed q: analytic when has_time_derivatives(), else a
+  /// central difference with step 1e-5 max(1, |t|).
+  double value_t(const Vec& q, double t) const;
+  /// grad_q (df/dt) (q, t), length n_local(): Dpi(q)^T grad_pi f~_t when
+  /// analytic, else a central difference of the exact gradient.
+  void gradient_t(const Vec& q, double t, Vec& g) const;
+  /// d2f/dt2 (q, t): analytic, or a central second difference with step
+  /// 1e-4 max(1, |t|).
+  double value_tt(const Vec& q, double t) const;
 
  protected:
   void set_n_invariants(int n) { n_invariants_ = n; }

@@ -24,6 +24,13 @@ struct FunctionOfQ {
   std::function<double(const Vec& q, double t)> value;
   std::function<Vec(const Vec& q, double t)> gradient;
   std::function<Mat(const Vec& q, double t)> hessian;
+  // Optional, for a time-dependent f (a driven constraint): the partial
+  // derivatives in t at fixed q, df/dt, grad_q df/dt and d2f/dt2. Give all
+  // three or none; without them IDA and generalized-alpha difference f in t,
+  // which limits IDA to tolerances of about 1e-9 (Term::value_t()).
+  std::function<double(const Vec& q, double t)> value_t;
+  std::function<Vec(const Vec& q, double t)> gradient_t;
+  std::function<double(const Vec& q, double t)> value_tt;
 };
 
 std::unique_ptr<Term> make_function_term(std::vector<int> dofs, FunctionOfQ f, std::string name,
@@ -39,6 +46,11 @@ struct FunctionOfPi {
   std::function<double(const Vec& pi, double t)> value;
   std::function<Vec(const Vec& pi, double t)> gradient;
   std::function<Mat(const Vec& pi, double t)> hessian;
+  // Optional, as in FunctionOfQ: d f~/dt, grad_pi d f~/dt and d2 f~/dt2 at
+  // fixed pi (all three or none).
+  std::function<double(const Vec& pi, double t)> value_t;
+  std::function<Vec(const Vec& pi, double t)> gradient_t;
+  std::function<double(const Vec& pi, double t)> value_tt;
 };
 
 std::unique_ptr<Term> make_invariant_term(std::vector<int> dofs,

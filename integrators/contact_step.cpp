@@ -49,6 +49,7 @@ void add_up(StepStats& total, const StepStats& r) {
 // The work and impulses of an accepted (sub-)step go into the step's.
 void add_accepted(StepStats& total, const StepStats& r) {
   total.external_work += r.external_work;
+  total.constraint_work += r.constraint_work;
   if (r.external_impulse.size() == 0) return;
   if (total.external_impulse.size() == 0) {
     total.external_impulse = r.external_impulse;

@@ -499,6 +499,10 @@ StepStats GeneralizedAlphaStepper::step(State& state, double dt) {
     stats.contact_exits = t.exits;
     stats.contact_events = t.total();
     stats.external_work = 0.5 * (load_ + tr.load).dot(tr.state.q - state.q);
+    stats.constraint_work =
+        0.5 * h *
+        (driven_constraint_power(system_, state.q, state.lambda, state.t) +
+         driven_constraint_power(system_, tr.state.q, tr.state.lambda, tr.state.t));
     const int dim = system_.dim();
     const Vec qm = 0.5 * (state.q + tr.state.q);
     resultant_and_moment(dim, qm, impulse, stats.external_impulse, stats.external_angular_impulse);

@@ -1,5 +1,5 @@
-// The IDA stepper (ida_stepper.hpp): the time derivatives the Term interface
-// lacks, the consistent start, and the driver: IDA's allocation and
+// The IDA stepper (ida_stepper.hpp): the time derivatives of driven
+// constraints, the consistent start, and the driver: IDA's allocation and
 // (re)starts with the active set settled, the loads' quadratures, contact
 // events and step(). The GGL system that IDA calls back (residual, Jacobian,
 // root functions) is in ida_residual.cpp; the state both share,
@@ -49,6 +49,10 @@ void check_ls(int flag, const char* call) {
   check(flag, call, IDAGetLinReturnFlagName);
 }
 
+// The smallest absolute tolerance of the multipliers in IDA's Newton
+// convergence test (allocate()).
+constexpr double kMultiplierAtol = 1e-10;
+
 // Central differences in t for the second derivative (start values only):
 // step 1e-4, truncation and round-off errors both ~1e-8.
 double time_step_second(double t) {
@@ -56,8 +60,7 @@ double time_step_second(double t) {
 }
 
 double phi_tt(const Term& c, const Vec& ql, double t) {
-  const double h = time_step_second(t);
-  return (c.value(ql, t + h) - 2 * c.value(ql, t) + c.value(ql, t - h)) / (h * h);
+  return c.value_tt(ql, t);
 }
 
 double prescribed_acceleration(const PrescribedDof& p, double t) {
@@ -72,9 +75,10 @@ bool same(const Vec& a, const Vec& b) {
 
 }  // namespace
 
-// --- time derivatives the Term interface does not provide ------------------
-// Central differences in t with step 1e-5 max(1, |t|): truncation ~1e-10,
-// round-off ~1e-11 relative.
+// --- time derivatives of driven constraints ---------------------------------
+// From the term when it supplies them (Term::has_time_derivatives()); else
+// central differences in t with step 1e-5 max(1, |t|): truncation ~1e-10,
+// round-off ~1e-11 relative, which is what limits IDA's tolerances then.
 
 namespace {
 double time_step_first(double t) {
@@ -83,12 +87,15 @@ double time_step_first(double t) {
 }  // namespace
 
 double constraint_rate(const Term& c, const Vec& q_local, double t) {
-  const double h = time_step_first(t);
-  return (c.value(q_local, t + h) - c.value(q_local, t - h)) / (2 * h);
+  return c.value_t(q_local, t);
 }
 
 void constraint_gradient_rate(const Term& c, const Vec& q_local, double t, Vec& out,
                               TermWorkspace& ws) {
+  if (c.has_time_derivatives()) {
+    c.gradient_t(q_local, t, out);
+    return;
+  }
   const double h = time_step_first(t);
   Vec gp, gm;
   term_gradient(c, GradientKind::Exact, q_local, q_local, t + h, t + h, gp, nullptr, ws);
@@ -357,7 +364,19 @@ int IdaStepper::Impl::restart(double t, const Vec& q0, const Vec& v0,
     void* p = mem.get();
     check_ida(IDASetErrHandlerFn(p, &Impl::error_cb, this), "IDASetErrHandlerFn");
     check_ida(IDAInit(p, &Impl::residual_cb, t, yy.get(), yp.get()), "IDAInit");
-    check_ida(IDASStolerances(p, set.rtol, set.atol), "IDASStolerances");
+    // The multipliers lambda, mu have no error test (IDASetSuppressAlg), but
+    // their weights still enter the Newton convergence test. In the index-2
+    // form they respond to the residual's round-off like 1/h, so with
+    // atol far below 1e-10 that test can fail on noise alone: IDA then cuts
+    // h, which makes the noise larger (a driven pendulum started with a
+    // non-zero dPhi/dt: 50 000 convergence failures down to h = 4e-22 at
+    // atol = 1e-12). Their absolute tolerance is held at kMultiplierAtol or
+    // above; q and v keep atol.
+    atolv = sundials::make_vector(size, ctx.get());
+    auto a = view(atolv.get());
+    a.setConstant(set.atol);
+    a.tail(2 * m).setConstant(std::max(set.atol, kMultiplierAtol));
+    check_ida(IDASVtolerances(p, set.rtol, atolv.get()), "IDASVtolerances");
     check_ida(IDASetUserData(p, this), "IDASetUserData");
     check_ida(IDASetId(p, id.get()), "IDASetId");
     check_ida(IDASetSuppressAlg(p, SUNTRUE), "IDASetSuppressAlg");
@@ -396,10 +415,13 @@ bool IdaStepper::Impl::continues(const State& st) const {
 // dt with its moment int x x (f + R) dt (R = M v' + grad V + G^T lambda - f
 // on the prescribed rows: the support reaction).
 bool IdaStepper::Impl::has_quadrature() const {
-  return !s.loads().empty() || !s.prescribed().empty();
+  return !s.loads().empty() || !s.prescribed().empty() ||
+         std::any_of(s.constraints().begin(), s.constraints().end(),
+                     [](const auto& c) { return c->depends_on_time(); });
 }
 
-void IdaStepper::Impl::quadrature_point(double t, double& power, Vec& impulse, Vec& angular) {
+void IdaStepper::Impl::quadrature_point(double t, double& power, double& drive, Vec& impulse,
+                                        Vec& angular) {
   check_ida(IDAGetDky(mem.get(), t, 0, yq.get()), "IDAGetDky");
   check_ida(IDAGetDky(mem.get(), t, 1, ypq.get()), "IDAGetDky");
   const auto y = view(yq.get());
@@ -407,6 +429,9 @@ void IdaStepper::Impl::quadrature_point(double t, double& power, Vec& impulse, V
   Vec density = Vec::Zero(n);
   if (!s.loads().empty()) s.add_load_forces(x, t, density);
   power = density.dot(u);
+  // The driven constraints' power lambda . dPhi/dt (the system's own
+  // constraints come first among the multipliers).
+  drive = driven_constraint_power(s, x, y.segment(2 * n, s.n_constraints()), t);
   if (!s.prescribed().empty()) {
     rq.resize(size);
     residual(t, y, view(ypq.get()), Eigen::Map<Vec>(rq.data(), size), false);
@@ -417,12 +442,13 @@ void IdaStepper::Impl::quadrature_point(double t, double& power, Vec& impulse, V
 
 void IdaStepper::Impl::integrate_loads(double a, double b, StepStats& stats) {
   if (!has_quadrature() || !(b > a)) return;
-  double p[3];
+  double p[3], d[3];
   Vec imp[3], ang[3];
   const double ts[3] = {a, 0.5 * (a + b), b};
-  for (int k = 0; k < 3; ++k) quadrature_point(ts[k], p[k], imp[k], ang[k]);
+  for (int k = 0; k < 3; ++k) quadrature_point(ts[k], p[k], d[k], imp[k], ang[k]);
   const double w = (b - a) / 6;
   stats.external_work += w * (p[0] + 4 * p[1] + p[2]);
+  stats.constraint_work += w * (d[0] + 4 * d[1] + d[2]);
   stats.external_impulse += w * (imp[0] + 4 * imp[1] + imp[2]);
   stats.external_angular_impulse += w * (ang[0] + 4 * ang[1] + ang[2]);
 }

@@ -70,6 +70,7 @@ struct IdaStepper::Impl {
   // the context last.
   sundials::Context ctx;
   sundials::Vector yy, yp, id, yq, ypq;
+  sundials::Vector atolv;  // absolute tolerances (the multipliers' held up)
   sundials::Matrix jmat;
   std::unique_ptr<KluSolver> klu;
   sundials::Memory<IDAFree> mem;
@@ -161,7 +162,7 @@ struct IdaStepper::Impl {
               double interval);
   bool continues(const State& st) const;
   bool has_quadrature() const;
-  void quadrature_point(double t, double& power, Vec& impulse, Vec& angular);
+  void quadrature_point(double t, double& power, double& drive, Vec& impulse, Vec& angular);
   void integrate_loads(double a, double b, StepStats& stats);
   int handle_root(double interval);
 };

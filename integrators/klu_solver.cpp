@@ -24,6 +24,11 @@ namespace {
 // fresh factorization's; below, the pivots have degraded and KLU pivots anew.
 constexpr double kRcondDrop = 1e-2;
 
+// SUNMatZero of a matrix that only KluSolver::load fills (keep_loaded).
+int keep_zero(SUNMatrix) {
+  return SUNMAT_SUCCESS;
+}
+
 }  // namespace
 
 struct KluSolver::Impl {
@@ -46,6 +51,7 @@ struct KluSolver::Impl {
   std::vector<long> outer, inner;  // the pattern analysed last
   const double* values = nullptr;  // the matrix's values (UMFPACK's solve reads them)
   std::vector<double> rhs;         // UMFPACK's right-hand side
+  SUNMatrix loaded = nullptr;      // the matrix load() filled last
 
   ~Impl() {
     free_numeric();
@@ -242,9 +248,19 @@ void KluSolver::load(const SparseMatrix& jac, SUNMatrix a) {
     m.inner.assign(ip, ip + nnz);
     m.pattern_changed = true;
   }
-  std::copy(op, op + n + 1, SUNSparseMatrix_IndexPointers(a));
-  std::copy(ip, ip + nnz, SUNSparseMatrix_IndexValues(a));
+  // A kept matrix (keep_loaded) still holds the pattern of the last load:
+  // nothing has zeroed its indices since.
+  const bool kept = a->ops->zero == &keep_zero && m.loaded == a;
+  if (!same || !kept) {
+    std::copy(op, op + n + 1, SUNSparseMatrix_IndexPointers(a));
+    std::copy(ip, ip + nnz, SUNSparseMatrix_IndexValues(a));
+  }
   std::copy(jac.valuePtr(), jac.valuePtr() + nnz, SUNSparseMatrix_Data(a));
+  m.loaded = a;
+}
+
+void KluSolver::keep_loaded(SUNMatrix a) {
+  a->ops->zero = &keep_zero;
 }
 
 }  // namespace emdae

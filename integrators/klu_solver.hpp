@@ -84,8 +84,16 @@ class KluSolver {
 
   /// Copies `jac` (compressed) into the SUNDIALS CSC matrix `a`, growing its
   /// storage if needed, and notes whether the pattern differs from the last
-  /// one loaded (then the next set-up analyses it anew).
+  /// one loaded (then the next set-up analyses it anew). For a matrix given
+  /// to keep_loaded() only the values are copied while the pattern holds.
   void load(const SparseMatrix& jac, SUNMatrix a);
+
+  /// Makes SUNMatZero on `a` do nothing: KINSOL and IDA zero the matrix
+  /// before every Jacobian evaluation, and load() then overwrites all of it
+  /// (values, and the pattern when it changed), so the zeroing was a pass
+  /// over the whole matrix for nothing. Only for a matrix that is filled by
+  /// load() alone.
+  static void keep_loaded(SUNMatrix a);
 
   const Counters& counters() const;
   /// The backend the last analysis chose (Klu or Umfpack; Auto before any).

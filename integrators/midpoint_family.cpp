@@ -120,7 +120,7 @@ StepStats MidpointFamilyStepper::solve_substep(State& state, double dt, const Ve
   const std::vector<const Term*> extra = active_terms(state.active);
   const int m = system_.n_constraints() + static_cast<int>(extra.size());
   StepProblem problem(system_, kind_, state, dt, extra, targets, stiffness_diag_,
-                      full_stiffness_diag_);
+                      full_stiffness_diag_, &pattern_);
   Vec x(n + m);
   x.head(n) = guess ? guess->q : Vec(state.q + dt * state.v);
   const Vec& lambda0 = guess && guess->lambda.size() == m ? guess->lambda : state.lambda;
@@ -138,6 +138,7 @@ StepStats MidpointFamilyStepper::solve_substep(State& state, double dt, const Ve
   Vec v1, force, load;
   problem.forces(q1, x.tail(m), force, load);
   velocity_from_momentum_balance(state, q1, force, load, dt, v1, stats.external_work);
+  stats.constraint_work = driven_work(state.q, q1, x.tail(m), state.t, state.t + dt);
   stats.external_impulse = external_impulse_;
   stats.external_angular_impulse = external_angular_impulse_;
   state.v = v1;
@@ -145,6 +146,28 @@ StepStats MidpointFamilyStepper::solve_substep(State& state, double dt, const Ve
   state.lambda = x.tail(m);
   state.t += dt;
   return stats;
+}
+
+// The work of the driven constraints in the step: their force
+// -lambda_l (grad Phi_l)_step times q1 - q0, the step's own gradient (the
+// discrete one for em, taken at t_mid: it satisfies (grad Phi)_step . dq =
+// Phi(q1, t_mid) - Phi(q0, t_mid), so with Phi = 0 at both ends this is
+// lambda (Phi(q1, t1) - Phi(q1, t_mid) + Phi(q0, t_mid) - Phi(q0, t0)),
+// lambda dPhi/dt dt to second order). It is exactly the constraint's part
+// of the scheme's energy balance H1 - H0.
+double MidpointFamilyStepper::driven_work(const Vec& q0, const Vec& q1, const Vec& lambda,
+                                          double t0, double t1) {
+  double work = 0.0;
+  Vec l0, l1, g;
+  for (int l = 0; l < system_.n_constraints(); ++l) {
+    const Term& c = *system_.constraints()[static_cast<std::size_t>(l)];
+    if (!c.depends_on_time()) continue;
+    gather(c, q0, l0);
+    gather(c, q1, l1);
+    term_gradient(c, kind_, l0, l1, t0, t1, g, nullptr, work_ws_);
+    work -= lambda[l] * g.dot(l1 - l0);
+  }
+  return work;
 }
 
 Vec MidpointFamilyStepper::inverse_mass(const Vec& f) const {

@@ -46,6 +46,7 @@
 
 #include <Eigen/SparseCholesky>
 
+#include "core/assembly.hpp"
 #include "core/gradient.hpp"
 #include "integrators/contact_step.hpp"
 #include "integrators/stepper.hpp"
@@ -68,6 +69,8 @@ class MidpointFamilyStepper : public Stepper, public SubstepScheme {
   void velocity_from_momentum_balance(const State& start, const Vec& q1, const Vec& force,
                                       const Vec& load, double dt, Vec& v1, double& work);
   std::vector<const Term*> active_terms(const std::vector<int>& active) const;
+  /// Work of the time-dependent constraints over the step (StepStats::constraint_work).
+  double driven_work(const Vec& q0, const Vec& q1, const Vec& lambda, double t0, double t1);
 
   const System& system_;
   GradientKind kind_;
@@ -76,11 +79,13 @@ class MidpointFamilyStepper : public Stepper, public SubstepScheme {
   ContactStepper contact_;
   Vec stiffness_diag_;       // |K_ii| at the initial configuration, if scaling by it
   Vec full_stiffness_diag_;  // |K_ii| at the initial configuration
+  JacobianPattern pattern_;  // the step Jacobian's, kept while it holds
   Vec external_impulse_, external_angular_impulse_;  // of the last solve
   std::vector<int> free_;                            // free dofs with mass, in order
   std::vector<int> massless_;                        // free dofs without mass
   SparseMatrix m_fp_;                                // M restricted to free rows, all columns
   Eigen::SimplicialLDLT<SparseMatrix> m_ff_;         // factor of M on the free dofs
+  TermWorkspace work_ws_;                            // for driven_work
 };
 
 }  // namespace emdae

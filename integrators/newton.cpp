@@ -67,6 +67,9 @@ struct NewtonSolver::Impl {
     N_VConst(1.0, uscale.get());
     jmat.reset(
         check_ptr(SUNSparseMatrix(n, n, std::max(1, n), CSC_MAT, ctx.get()), "SUNSparseMatrix"));
+    // jacobian_cb fills all of it (KluSolver::load): KINSOL's SUNMatZero
+    // before each evaluation is left out.
+    KluSolver::keep_loaded(jmat.get());
     // AMD: our Jacobians are structurally symmetric (FE stiffness, constraint
     // blocks G and G^T), where AMD orders with far less fill than KLU's
     // default COLAMD (measured on the bearing: see docs/performance.md). The

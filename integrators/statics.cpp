@@ -1,7 +1,7 @@
 #include "integrators/statics.hpp"
 
 #include <cstdio>
-#include <cstdlib>
+#include <limits>
 #include <sstream>
 #include <stdexcept>
 
@@ -105,6 +105,22 @@ class PseudoTransientStepper final : public MidpointFamilyStepper {
   std::string name() const override { return "pseudo-transient"; }
 };
 
+// The largest change a pseudo step may make: a tenth of the diagonal of the
+// configuration's bounding box (a body pushed by a force while it touches
+// nothing has no stiffness against the push, and a step of the full pseudo_dt
+// would throw it h^2 F / 2m away, far past what it should meet).
+double step_change_limit(const System& system, const Vec& q) {
+  const int dim = system.dim();
+  Eigen::VectorXd lo = Eigen::VectorXd::Constant(dim, std::numeric_limits<double>::infinity());
+  Eigen::VectorXd hi = -lo;
+  for (int a = 0; a < system.n_nodes(); ++a) {
+    lo = lo.cwiseMin(q.segment(a * dim, dim));
+    hi = hi.cwiseMax(q.segment(a * dim, dim));
+  }
+  const double diagonal = system.n_nodes() > 0 ? (hi - lo).norm() : 0.0;
+  return diagonal > 0 ? 0.1 * diagonal : std::numeric_limits<double>::infinity();
+}
+
 }  // namespace
 
 StaticResult solve_static_held(const System& system, State& state, const StaticSettings& settings) {
@@ -116,46 +132,81 @@ StaticResult solve_static_held(const System& system, State& state, const StaticS
   // q_mid, and steps from rest would alternate between q_k and 2 q_eq - q_k.
   PseudoTransientStepper stepper(system, settings.newton, scheme);
   const double t_load = state.t;
-  const double h = settings.pseudo_dt;
+  // The pseudo step adapts: a step whose Newton solve fails, or that moves
+  // the configuration by more than the limit, is repeated with h / 4; after
+  // an accepted step h grows by 4 back towards pseudo_dt. Only a step of the
+  // full pseudo_dt can end the solve (a short step changes little because it
+  // is short, not because the state is at equilibrium).
+  const double h_max = settings.pseudo_dt;
+  const double h_min = h_max * 1e-12;
+  const double limit =
+      settings.max_change > 0 ? settings.max_change : step_change_limit(system, state.q);
+  double h = h_max;
+  int cutbacks = 0;
   StaticResult out;
+  const auto trace = [&](const char* what, const StepStats& r, double change) {
+    if (!settings.verbose) return;
+    std::fprintf(stderr,
+                 "statics: step %d %s, pseudo dt %.3e, change %.3e, %zu active, %d Newton "
+                 "iterations (residual %.3e), %d events\n",
+                 out.steps, what, h, change, state.active.size(), r.iterations, r.residual,
+                 r.contact_events);
+  };
   for (out.steps = 1; out.steps <= settings.max_steps; ++out.steps) {
     const Vec q_prev = state.q;
+    const std::vector<int> active_prev = state.active;
+    const Vec lambda_prev = state.lambda;
     state.v.setZero();
     // Loads and prescribed motions act at the end of the pseudo step.
     state.t = t_load - h;
     const StepStats r = stepper.step(state, h);
     out.newton_iterations += r.iterations;
-    if (!r.converged) {
-      state.q = q_prev;
-      state.t = t_load;
-      std::ostringstream msg;
-      msg << "static solve: Newton failed in pseudo step " << out.steps << " (" << r.iterations
-          << " iterations, residual " << r.residual << ", " << r.message << ")";
-      out.message = msg.str();
-      return out;
-    }
     state.t = t_load;
-    out.change = (state.q - q_prev).lpNorm<Eigen::Infinity>();
-    if (std::getenv("EMDAE_STATICS_PRINT")) {
-      Eigen::Index where = 0;
-      (state.q - q_prev).cwiseAbs().maxCoeff(&where);
-      std::fprintf(
-          stderr, "statics: step %d change %.3e at dof %ld, %zu active, %d iterations, %d events\n",
-          out.steps, out.change, static_cast<long>(where), state.active.size(), r.iterations,
-          r.contact_events);
+    const double change = r.converged ? (state.q - q_prev).lpNorm<Eigen::Infinity>()
+                                      : std::numeric_limits<double>::infinity();
+    if (!r.converged || !(change <= limit)) {
+      trace(r.converged ? "too large, cut back" : "Newton failed, cut back", r, change);
+      state.q = q_prev;
+      state.active = active_prev;
+      state.lambda = lambda_prev;
+      state.v.setZero();
+      if (h / 4 < h_min) {
+        std::ostringstream msg;
+        msg << "static solve: no pseudo step succeeds in step " << out.steps
+            << " even after cutting statics.pseudo_dt = " << h_max << " back " << cutbacks
+            << " times to " << h << " (last: ";
+        if (!r.converged)
+          msg << "Newton failed after " << r.iterations << " iterations, residual " << r.residual
+              << ", " << r.message;
+        else
+          msg << "change " << change << " > limit " << limit;
+        msg << "); try another statics.pseudo_dt or more statics.increments";
+        out.message = msg.str();
+        return out;
+      }
+      h /= 4;
+      ++cutbacks;
+      --out.steps;  // the same step again
+      continue;
     }
-    if (out.change <= settings.tolerance) {
+    out.change = change;
+    trace("accepted", r, change);
+    if (h == h_max && out.change <= settings.tolerance) {
       state.v.setZero();
       out.converged = true;
       out.message = "ok";
       return out;
     }
+    h = std::min(h_max, 4 * h);
   }
   state.v.setZero();
   out.steps = settings.max_steps;
   std::ostringstream msg;
   msg << "static solve: not converged after " << settings.max_steps << " pseudo steps (last change "
-      << out.change << ")";
+      << out.change << " > statics.tolerance = " << settings.tolerance << ", pseudo dt " << h
+      << " of statics.pseudo_dt = " << h_max << ", " << cutbacks
+      << " cut-backs); try more statics.max_steps, another statics.pseudo_dt or more "
+         "statics.increments";
   out.message = msg.str();
   return out;
 }

@@ -15,6 +15,12 @@
 // stay zero during the solve (a linear constraint, removed afterwards; its
 // multiplier is the moment it took, reported in the result).
 //
+// The pseudo step adapts (cut back by 4 when Newton fails or a step moves
+// more than `max_change`, grown by 4 after each accepted step up to
+// `pseudo_dt`), so that a body pushed by a force onto another it does not
+// touch yet closes the gap in a few bounded steps instead of being thrown
+// away by the first. Only a step of the full pseudo_dt can end the solve.
+//
 // Load increments: with `increments` = n > 1 the loads and prescribed motions
 // are evaluated at t_k = t_0 + (t_load - t_0) k / n, k = 1..n, t_0 = state.t,
 // each solve starting from the previous equilibrium (a large prescribed push
@@ -40,6 +46,11 @@ struct StaticSettings {
   // Time the loads and prescribed motions are evaluated at in the last
   // increment; empty: state.t (every increment at the state's own time).
   std::optional<double> load_time;
+  // Largest change max |q_k+1 - q_k| a pseudo step may make; 0: a tenth of
+  // the diagonal of the configuration's bounding box.
+  double max_change = 0.0;
+  // Print every pseudo step (accepted or cut back) to stderr.
+  bool verbose = false;
 };
 
 struct StaticResult {

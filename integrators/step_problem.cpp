@@ -16,7 +16,8 @@ namespace emdae {
 // factorization after each cheap numeric refactorization.
 StepProblem::StepProblem(const System& s, GradientKind kind, const State& start, double dt,
                          const std::vector<const Term*>& extra, const Vec& targets,
-                         const Vec& stiffness_diag, const Vec& full_stiffness)
+                         const Vec& stiffness_diag, const Vec& full_stiffness,
+                         JacobianPattern* pattern)
     : s_(s),
       kind_(kind),
       assembler_(s, extra),
@@ -28,7 +29,8 @@ StepProblem::StepProblem(const System& s, GradientKind kind, const State& start,
       k_(stiffness_diag),
       k_full_(full_stiffness),
       n_(s.n_dofs()),
-      m_(s.n_constraints() + static_cast<int>(extra.size())) {
+      m_(s.n_constraints() + static_cast<int>(extra.size())),
+      pattern_(pattern ? pattern : &own_pattern_) {
   targets_ = Vec::Zero(m_);
   targets_.tail(targets.size()) = targets;
   lambda0_ = start.lambda.size() == m_ ? start.lambda : Vec::Zero(m_);
@@ -132,20 +134,25 @@ void StepProblem::residual(const Vec& x, Vec& f) {
   const Vec q1 = x.head(n_);
   const Vec lambda = kappa_ * x.tail(m_);
   f.resize(size());
-  Vec fq = (2.0 / (dt_ * dt_)) * (s_.mass() * (q1 - q0_ - dt_ * v0_));
+  // The forces F (and loads f) are kept with the point they were evaluated
+  // at: the velocity update after the solve needs them at the solution,
+  // which is where the last residual was evaluated (forces()).
+  res_force_.setZero(n_);
+  res_load_.setZero(n_);
   if (massless_mode()) {
-    add_massless_forces(q1, lambda, fq, &load_, nullptr);
+    add_massless_forces(q1, lambda, res_force_, &res_load_, nullptr);
   } else {
-    assembler_.add_potential_forces(kind_, q0_, q1, t0_, t1_, fq, nullptr);
-    assembler_.add_constraint_forces(kind_, q0_, q1, t0_, t1_, lambda, fq, &phi_, nullptr, n_, n_,
-                                     1.0, &increment_);
+    assembler_.add_potential_forces(kind_, q0_, q1, t0_, t1_, res_force_, nullptr);
+    assembler_.add_constraint_forces(kind_, q0_, q1, t0_, t1_, lambda, res_force_, &phi_, nullptr,
+                                     n_, n_, 1.0, &increment_);
     if (!s_.loads().empty()) {
-      load_.setZero(n_);
-      s_.add_load_forces(load_point(q1), load_time(), load_);
-      fq -= load_;
+      s_.add_load_forces(load_point(q1), load_time(), res_load_);
+      res_force_ -= res_load_;
     }
   }
-  f.head(n_) = fq;
+  res_q1_ = q1;
+  res_lambda_ = lambda;
+  f.head(n_) = (2.0 / (dt_ * dt_)) * (s_.mass() * (q1 - q0_ - dt_ * v0_)) + res_force_;
   // The system's constraints: Phi(q1) = 0. Contact rows: Phi(q0) +
   // (Phi(q1) - Phi(q0)) = target, with the increment G . (q1 - q0) for
   // the discrete gradient. Under persistency (target = Phi(q0)) the row is
@@ -203,10 +210,12 @@ void StepProblem::jacobian(const Vec& x, SparseMatrix& j) {
   trip_.clear();
   assembler_.add_mass(trip_, 2.0 / (dt_ * dt_));
   force_.setZero(n_);
+  // Outside massless mode the potentials' Jacobians (the element blocks, most
+  // of the matrix) go straight into the compressed values at the end; the
+  // rest is a triplet list whose slots are kept while its pattern holds.
   if (massless_mode()) {
     add_massless_forces(q1, lambda, force_, nullptr, &trip_);
   } else {
-    assembler_.add_potential_forces(kind_, q0_, q1, t0_, t1_, force_, &trip_);
     assembler_.add_constraint_forces(kind_, q0_, q1, t0_, t1_, lambda, force_, nullptr, &trip_, n_,
                                      n_);
     // Loads at the midpoint: d/dq1 of -f(q_mid) is -1/2 df/dq (-df/dq at the end).
@@ -235,11 +244,24 @@ void StepProblem::jacobian(const Vec& x, SparseMatrix& j) {
     if (e.row() >= n_ || e.col() >= n_)
       e = Eigen::Triplet<double, long>(e.row(), e.col(), kappa_ * e.value());
   for (const auto& p : s_.prescribed()) trip_.emplace_back(p.dof, p.dof, kappa_);
-  j.resize(size(), size());
-  j.setFromTriplets(trip_.begin(), trip_.end());
+  if (massless_mode()) {
+    j.resize(size(), size());
+    j.setFromTriplets(trip_.begin(), trip_.end());
+    return;
+  }
+  pattern_->prepare(trip_, s_, size(), j);
+  pattern_->scatter(trip_, j);
+  assembler_.add_potential_jacobian(kind_, q0_, q1, t0_, t1_, j.valuePtr(),
+                                    pattern_->potential_slots());
 }
 
 void StepProblem::forces(const Vec& q1, const Vec& lambda, Vec& force, Vec& load) {
+  if (q1.size() == res_q1_.size() && lambda.size() == res_lambda_.size() && q1 == res_q1_ &&
+      lambda == res_lambda_) {
+    force = res_force_;  // the last residual's, at this very point
+    load = res_load_;
+    return;
+  }
   force = Vec::Zero(n_);
   load = Vec::Zero(n_);
   if (massless_mode()) {

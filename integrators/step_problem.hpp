@@ -80,9 +80,11 @@ class StepProblem final : public NewtonProblem {
   /// @param targets   their target gaps at the end of the step
   /// @param stiffness_diag  |K_ii| when rows are stiffness-scaled (statics), else 0
   /// @param full_stiffness  |K_ii| at the initial configuration
+  /// @param pattern   the Jacobian's pattern and slots, kept by the caller
+  ///                  across steps (null: the problem keeps its own)
   StepProblem(const System& s, GradientKind kind, const State& start, double dt,
               const std::vector<const Term*>& extra, const Vec& targets, const Vec& stiffness_diag,
-              const Vec& full_stiffness);
+              const Vec& full_stiffness, JacobianPattern* pattern = nullptr);
 
   double kappa() const { return kappa_; }
   int size() const override { return n_ + m_; }
@@ -136,8 +138,11 @@ class StepProblem final : public NewtonProblem {
   Vec penalty_;  // k_l of each row, 0 for an exact constraint
   std::vector<int> penalty_rows_;
   double kinetic0_ = 0.0;
-  Vec phi_, force_, load_;
+  Vec phi_, force_;
+  Vec res_q1_, res_lambda_, res_force_, res_load_;  // the last residual's point and forces
   Triplets trip_;
+  JacobianPattern own_pattern_;
+  JacobianPattern* pattern_;
   // Massless mode.
   std::vector<Group> groups_;
   std::vector<bool> massless_, massive_rows_;

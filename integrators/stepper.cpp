@@ -2,6 +2,7 @@
 
 #include <stdexcept>
 
+#include "core/gradient.hpp"
 #include "integrators/energy_momentum.hpp"
 #include "integrators/generalized_alpha.hpp"
 #include "integrators/ida_stepper.hpp"
@@ -23,6 +24,18 @@ void deactivate_candidate(State& s, int n_static, std::size_t k) {
   lam.tail(lam.size() - pos) = s.lambda.tail(s.lambda.size() - pos - 1);
   s.lambda = lam;
   s.active.erase(s.active.begin() + static_cast<std::ptrdiff_t>(k));
+}
+
+double driven_constraint_power(const System& system, const Vec& q, const Vec& lambda, double t) {
+  double power = 0.0;
+  Vec ql;
+  for (int l = 0; l < system.n_constraints() && l < lambda.size(); ++l) {
+    const Term& c = *system.constraints()[static_cast<std::size_t>(l)];
+    if (!c.depends_on_time()) continue;
+    gather(c, q, ql);
+    power += lambda[l] * c.value_t(ql, t);
+  }
+  return power;
 }
 
 State initial_state(const System& system) {

@@ -36,6 +36,12 @@ void activate_candidate(State& s, int id);
 /// multiplier (at n_static + k, after the system's own constraints).
 void deactivate_candidate(State& s, int n_static, std::size_t k);
 
+/// The power of the system's time-dependent constraints at (q, t) with
+/// multipliers lambda (the system's constraints first, as in State):
+/// sum_l lambda_l dPhi_l/dt, dPhi/dt at fixed q (Term::value_t()). 0 when
+/// no constraint depends on time.
+double driven_constraint_power(const System& system, const Vec& q, const Vec& lambda, double t);
+
 /// The initial state of a system: its initial positions and velocities, with
 /// prescribed dofs moved to g(0), g'(0), and zero multipliers.
 State initial_state(const System& system);
@@ -51,6 +57,13 @@ struct StepStats {
   int contact_entries = 0;
   int contact_exits = 0;
   double external_work = 0.0;  // work of the loads over the step
+  // Work of the driven (time-dependent) constraints over the step,
+  // int lambda . dPhi/dt dt (the constraint force -G^T lambda has power
+  // -lambda . G v = lambda . dPhi/dt on a motion that keeps Phi = 0): em and
+  // midpoint report exactly what enters their energy balance,
+  // -lambda . (grad Phi step) . (q1 - q0); generalized-alpha the trapezoidal
+  // rule, IDA Simpson's rule on its internal steps.
+  double constraint_work = 0.0;
   // Impulse of the loads and of the supports (prescribed dofs) over the
   // step, and their moments about the origin (2D: one component): the
   // momentum balance p_{n+1} - p_n = impulses, which the energy-momentum and

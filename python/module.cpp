@@ -18,9 +18,11 @@
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
+#include <algorithm>
 #include <cmath>
 #include <exception>
 #include <memory>
+#include <optional>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -529,6 +531,31 @@ void bind_model(py::module_& m) {
       .def("add_link", &Model::add_link, py::arg("a"), py::arg("b"), py::arg("length") = 0.0)
       .def("add_anchor", &Model::add_anchor, py::arg("particle"), py::arg("point"),
            py::arg("length") = 0.0)
+      .def(
+          "add_moving_anchor",
+          [](Model& x, const std::string& particle, const Vec& point, std::vector<double> times,
+             std::vector<std::vector<double>> displacements, const std::string& interpolation,
+             double length) {
+            const std::vector<std::string> kinds = {"linear", "cubic", "periodic"};
+            const auto it = std::find(kinds.begin(), kinds.end(), interpolation);
+            if (it == kinds.end())
+              throw ModelError("interpolation",
+                               "must be \"linear\", \"cubic\" or \"periodic\", received \"" +
+                                   interpolation + "\"");
+            std::optional<AnchorPath> path;
+            try {
+              path.emplace(point, std::move(times), std::move(displacements),
+                           static_cast<AnchorPath::Interpolation>(it - kinds.begin()));
+            } catch (const std::invalid_argument& e) {
+              throw ModelError("path", e.what());
+            }
+            x.add_moving_anchor(particle, *path, length);
+          },
+          py::arg("particle"), py::arg("point"), py::arg("times"), py::arg("displacements"),
+          py::arg("interpolation") = "cubic", py::arg("length") = 0.0,
+          "A rigid link to a point moving on point + u(t): u interpolated through "
+          "(times, displacements[axis]) by GSL, 'linear', 'cubic' or 'periodic' (the scene's "
+          "[[anchors]] path).")
       .def("add_anchors", &Model::add_anchors, py::arg("nodes"), py::arg("point"))
       .def("add_gravity", &Model::add_gravity, py::arg("acceleration"))
       .def(
@@ -665,7 +692,18 @@ void bind_settings(py::module_& m) {
   py::class_<OutputSettings>(m, "OutputSettings")
       .def(py::init<>())
       .def_readwrite("every", &OutputSettings::every)
-      .def_readwrite("vtu_every", &OutputSettings::vtu_every);
+      .def_readwrite("vtu_every", &OutputSettings::vtu_every)
+      .def_readwrite("track", &OutputSettings::track)
+      .def_property(
+          "vtu_format",
+          [](const OutputSettings& s) { return std::string(to_string(s.vtu_format)); },
+          [](OutputSettings& s, const std::string& w) {
+            try {
+              s.vtu_format = parse_vtu_format(w);
+            } catch (const std::invalid_argument& e) {
+              throw InputError(std::string("output.vtu_format: ") + e.what());
+            }
+          });
   py::class_<Tolerances>(m, "Tolerances")
       .def(py::init<>())
       .def_readwrite("energy_rel", &Tolerances::energy_rel)
@@ -807,7 +845,7 @@ void bind_commands(py::module_& m) {
       "_compare",
       [](const std::string& scene_path, const std::string& schemes, const std::string& dt,
          const std::string& t_end, const std::string& out_dir,
-         const std::vector<std::string>& overrides) {
+         const std::vector<std::string>& overrides, int jobs) {
         CompareOptions o;
         o.scene_path = scene_path;
         o.schemes = schemes;
@@ -816,6 +854,7 @@ void bind_commands(py::module_& m) {
         o.out_dir = out_dir;
         o.overrides = overrides;
         o.quiet = true;
+        o.jobs = jobs;
         std::ostringstream out, err;
         int code;
         {
@@ -825,7 +864,7 @@ void bind_commands(py::module_& m) {
         return py::make_tuple(code, out.str(), err.str());
       },
       py::arg("scene_path"), py::arg("schemes"), py::arg("dt"), py::arg("t_end"),
-      py::arg("out_dir"), py::arg("overrides"));
+      py::arg("out_dir"), py::arg("overrides"), py::arg("jobs"));
   m.def(
       "_study",
       [](const std::string& scene_path, const std::string& schemes,
@@ -833,7 +872,7 @@ void bind_commands(py::module_& m) {
          const std::string& t_end, const std::string& reference_dt,
          const std::optional<std::string>& times, const std::optional<std::string>& measures,
          bool reference_check, const std::string& out_dir,
-         const std::vector<std::string>& overrides) {
+         const std::vector<std::string>& overrides, int jobs) {
         StudyOptions o;
         o.scene_path = scene_path;
         o.schemes = schemes;
@@ -847,6 +886,7 @@ void bind_commands(py::module_& m) {
         o.out_dir = out_dir;
         o.overrides = overrides;
         o.quiet = true;
+        o.jobs = jobs;
         std::ostringstream out, err;
         int code;
         {
@@ -857,7 +897,7 @@ void bind_commands(py::module_& m) {
       },
       py::arg("scene_path"), py::arg("schemes"), py::arg("dts"), py::arg("tols"), py::arg("t_end"),
       py::arg("reference_dt"), py::arg("times"), py::arg("measures"), py::arg("reference_check"),
-      py::arg("out_dir"), py::arg("overrides"));
+      py::arg("out_dir"), py::arg("overrides"), py::arg("jobs"));
 }
 
 }  // namespace

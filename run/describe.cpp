@@ -179,8 +179,9 @@ Settings overview(const Model& model, const RunSettings& s) {
   std::string fields;
   if (!bodies.empty()) {
     const long every = vtu_interval(s.output.vtu_every, steps);
-    fields =
-        every == 0 ? ", no VTU fields" : fmt::format(", VTU fields every {} {}(s)", every, unit);
+    fields = every == 0 ? ", no VTU fields"
+                        : fmt::format(", VTU fields ({}) every {} {}(s)",
+                                      to_string(s.output.vtu_format), every, unit);
   }
   row("output", fmt::format("history row every {} {}(s){}{}", s.output.every, unit, fields,
                             model.contacts().empty() ? "" : ", contact.csv"));

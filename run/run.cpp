@@ -23,6 +23,7 @@
 #include "verify/history.hpp"
 #include "verify/report.hpp"
 #include "verify/snapshots.hpp"
+#include "verify/trajectories.hpp"
 #include "verify/vtu.hpp"
 
 namespace emdae {
@@ -31,8 +32,14 @@ namespace {
 
 namespace fs = std::filesystem;
 
+// The CPU time of the calling thread: a run's own, also when a study or a
+// comparison runs other cases on other threads of the process (std::clock()
+// would count theirs too). A run stays on the thread that started it.
 double cpu_now() {
-  return static_cast<double>(std::clock()) / CLOCKS_PER_SEC;
+  timespec ts{};
+  if (::clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts) != 0)
+    return static_cast<double>(std::clock()) / CLOCKS_PER_SEC;
+  return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
 }
 
 // The observer of a run that has none.
@@ -88,7 +95,8 @@ class FieldOutput {
         bodies.push_back({b.name, b.mesh, b.info.node_offset, b.material});
     if (settings.out_dir.empty() || bodies.empty() || every_ == 0) return;
     try {
-      writer_ = std::make_unique<FieldWriter>(settings.out_dir, std::move(bodies), model.dim());
+      writer_ = std::make_unique<FieldWriter>(settings.out_dir, std::move(bodies), model.dim(),
+                                              settings.output.vtu_format);
       if (model.system().n_unilateral() > 0)
         writer_->add_point_scalar("contact_pressure", [&system = model.system()](const State& s) {
           return contact_pressure_field(system, s);
@@ -137,6 +145,80 @@ class FieldOutput {
   RunObserver& observer_;
   long every_ = 0, written_ = -1;
   std::unique_ptr<FieldWriter> writer_;
+};
+
+// The points whose trajectories a run writes: every particle, then the
+// nodes of each tracked set ("body.set:k", k the node's index in its mesh).
+std::vector<TrackedPoint> tracked_points(const Model& model, const RunSettings& settings) {
+  std::vector<TrackedPoint> out;
+  for (const Particle& p : model.particles()) out.push_back({p.name, p.node});
+  for (const std::string& set : settings.output.track) {
+    const Body* body = model.find_set(set, Model::SetKind::Nodes, "output.track").first;
+    for (int node : model.nodes(set))
+      out.push_back({fmt::format("{}:{}", set, node - body->info.node_offset), node});
+  }
+  return out;
+}
+
+// trajectories.csv (a row per point at each history row) and the VTK points
+// (at the fields' steps); as with the fields, a failure to write is
+// reported once and ends this output, not the run.
+class TrajectoryOutput {
+ public:
+  TrajectoryOutput(const Model& model, const RunSettings& settings, RunObserver& observer,
+                   long offset = -1, const std::vector<std::pair<double, std::string>>& index = {})
+      : observer_(observer) {
+    std::vector<TrackedPoint> points = tracked_points(model, settings);
+    if (settings.out_dir.empty() || points.empty()) return;
+    every_ = vtu_interval(settings.output.vtu_every, planned_steps(settings));
+    try {
+      writer_ = offset >= 0 ? std::make_unique<TrajectoryWriter>(
+                                  settings.out_dir, std::move(points), model.dim(), offset, index)
+                            : std::make_unique<TrajectoryWriter>(settings.out_dir,
+                                                                 std::move(points), model.dim());
+    } catch (const std::exception& e) {
+      fail(e);
+    }
+  }
+  void rows(const State& s) {
+    guarded([&] { writer_->write_rows(s); });
+  }
+  void maybe_points(const State& s, long step, bool last = false) {
+    if (every_ == 0 || (!last && step % every_ != 0) || step == points_written_) return;
+    guarded([&] { writer_->write_points(s, step); });
+    points_written_ = step;
+  }
+  void close() {
+    guarded([&] { writer_->close(); });
+  }
+  bool active() const { return writer_ != nullptr; }
+  const std::string& error() const { return error_; }
+  long offset() const { return writer_ ? writer_->offset() : -1; }
+  std::vector<std::pair<double, std::string>> index() const {
+    return writer_ ? writer_->index() : std::vector<std::pair<double, std::string>>{};
+  }
+  long points_written() const { return points_written_; }
+  void restore(long points_written) { points_written_ = points_written; }
+
+ private:
+  template <class F>
+  void guarded(F&& f) {
+    if (!writer_) return;
+    try {
+      f();
+    } catch (const std::exception& e) {
+      fail(e);
+    }
+  }
+  void fail(const std::exception& e) {
+    error_ = std::string("trajectories incomplete: ") + e.what();
+    observer_.warned(std::string("no further trajectories: ") + e.what());
+    writer_.reset();
+  }
+  std::string error_;
+  RunObserver& observer_;
+  long every_ = 0, points_written_ = -1;
+  std::unique_ptr<TrajectoryWriter> writer_;
 };
 
 // The bodies' states the report draws (verify/snapshots.hpp), for runs that
@@ -236,7 +318,7 @@ bool solve_statics(Model& model, const RunSettings& settings, State& state, RunI
 
 // The time loop: each accepted step goes to the recorder, then to
 // `on_sample`; the observer may end it between steps. Sets info.status and
-// info.cpu_seconds (the process CPU time of the loop).
+// info.cpu_seconds (the CPU time of the loop, on the thread that runs it).
 RunResult::End integrate_model(const std::function<std::unique_ptr<Stepper>()>& make, State& state,
                                const TimeSettings& time, Recorder& recorder, RunInfo& info,
                                RunObserver& observer, DriverState& driver, long checkpoint_every,
@@ -280,7 +362,8 @@ RunResult::End integrate_model(const std::function<std::unique_ptr<Stepper>()>& 
 
 // --- checkpoints --------------------------------------------------------------------
 
-constexpr const char* kCheckpointMagic = "emdae checkpoint 1";
+// 2: with the trajectories' place.
+constexpr const char* kCheckpointMagic = "emdae checkpoint 2";
 
 // What a checkpoint holds besides the recorder: the loop, the state, where
 // the history and the fields are.
@@ -290,6 +373,8 @@ struct Checkpoint {
   long history_offset = 0, history_rows = 0, last_written = 0, fields_written = -1;
   double cpu_seconds = 0.0;
   std::vector<std::pair<double, std::string>> fields_index;
+  long trajectories_offset = -1, trajectories_written = -1;  // -1: none
+  std::vector<std::pair<double, std::string>> trajectories_index;
 };
 
 // The run a checkpoint belongs to: a resume of another scene, scheme or
@@ -322,6 +407,13 @@ void write_checkpoint(const std::string& dir, const std::string& identity, const
   put(out, c.cpu_seconds);
   put<std::uint64_t>(out, c.fields_index.size());
   for (const auto& [t, file] : c.fields_index) {
+    put(out, t);
+    put_string(out, file);
+  }
+  put(out, c.trajectories_offset);
+  put(out, c.trajectories_written);
+  put<std::uint64_t>(out, c.trajectories_index.size());
+  for (const auto& [t, file] : c.trajectories_index) {
     put(out, t);
     put_string(out, file);
   }
@@ -364,6 +456,13 @@ Checkpoint read_checkpoint(const std::string& dir, const std::string& identity,
       const double t = get<double>(in);
       c.fields_index.emplace_back(t, get_string(in));
     }
+    c.trajectories_offset = get<long>(in);
+    c.trajectories_written = get<long>(in);
+    const auto m = get<std::uint64_t>(in);
+    for (std::uint64_t i = 0; i < m && in; ++i) {
+      const double t = get<double>(in);
+      c.trajectories_index.emplace_back(t, get_string(in));
+    }
     recorder.restore(in);
     if (get_string(in) != kCheckpointMagic) throw std::runtime_error("it is damaged");
   } catch (const std::runtime_error& e) {
@@ -383,8 +482,9 @@ void create_output_folder(const std::string& dir) {
 }
 
 bool is_run_output(const std::string& name) {
-  static const char* const kOwn[] = {"history.csv", "summary.json", "report.html", "contact.csv",
-                                     "fields.pvd",  "fields",       "checkpoint",  ".emdae.lock"};
+  static const char* const kOwn[] = {
+      "history.csv",      "summary.json",     "report.html",  "contact.csv", "fields.pvd", "fields",
+      "trajectories.csv", "trajectories.pvd", "trajectories", "checkpoint",  ".emdae.lock"};
   for (const char* own : kOwn)
     if (name == own) return true;
   // write_atomically's temporary files ("summary.json.tmp.123") of a killed run.
@@ -511,6 +611,12 @@ RunResult run(Model& model, const RunSettings& settings, RunObserver* watcher) {
     }
   }
   FieldOutput fields(model, settings, observer);
+  // A resumed run cuts trajectories.csv back to its checkpoint's place.
+  TrajectoryOutput trajectories =
+      resumed && resumed->trajectories_offset >= 0
+          ? TrajectoryOutput(model, settings, observer, resumed->trajectories_offset,
+                             resumed->trajectories_index)
+          : TrajectoryOutput(model, settings, observer);
   // A report is a view of the run: a failure to keep its drawings only costs them.
   std::unique_ptr<SnapshotRecorder> bodies;
   const auto snap = [&](const std::function<void()>& f) {
@@ -537,8 +643,11 @@ RunResult run(Model& model, const RunSettings& settings, RunObserver* watcher) {
     last_written = resumed->last_written;
     info.cpu_seconds = resumed->cpu_seconds;
     fields.restore(resumed->fields_index, resumed->fields_written);
+    trajectories.restore(resumed->trajectories_written);
   } else {
     fields.maybe_write(state, 0);
+    if (history) trajectories.rows(state);
+    trajectories.maybe_points(state, 0);
   }
   const auto checkpoint = [&] {
     Checkpoint c;
@@ -549,6 +658,9 @@ RunResult run(Model& model, const RunSettings& settings, RunObserver* watcher) {
     c.last_written = last_written;
     c.fields_written = fields.written();
     c.fields_index = fields.index();
+    c.trajectories_offset = trajectories.offset();
+    c.trajectories_written = trajectories.points_written();
+    c.trajectories_index = trajectories.index();
     c.cpu_seconds = info.cpu_seconds;
     write_checkpoint(dir, identity, c, recorder);
     if (!settings.resume_note.empty())
@@ -560,9 +672,11 @@ RunResult run(Model& model, const RunSettings& settings, RunObserver* watcher) {
   const auto keep = [&](const State& s, const Sample& sample, bool last) {
     if (history && (last || sample.step % settings.output.every == 0)) {
       history->write(sample);
+      trajectories.rows(s);
       last_written = sample.step;
     }
     fields.maybe_write(s, sample.step, last);
+    trajectories.maybe_points(s, sample.step, last);
     if (sample.step > 0) snap([&] { bodies->observe(s, sample.step, sample.active_contacts); });
     observer.sampled(s, sample, recorder);
   };
@@ -618,6 +732,7 @@ RunResult run(Model& model, const RunSettings& settings, RunObserver* watcher) {
     observer.finished();
     // The last state always ends the fields too.
     fields.maybe_write(state, recorder.last().step, true);
+    trajectories.maybe_points(state, recorder.last().step, true);
     take_contact(state);
   }
   snap([&] { bodies->finish(state, recorder.last().step, recorder.last().active_contacts); });
@@ -628,15 +743,20 @@ RunResult run(Model& model, const RunSettings& settings, RunObserver* watcher) {
 
   // The last state always ends the history, whatever `every` is.
   if (history) {
-    if (recorder.last().step != last_written) history->write(recorder.last());
+    if (recorder.last().step != last_written) {
+      history->write(recorder.last());
+      trajectories.rows(state);
+    }
     history->close();
   }
+  trajectories.close();
   result.summary = summarize(info, system, recorder, settings.tolerances);
   result.fields = fields.active();
+  result.trajectories = trajectories.active();
   result.contact_table = writes && contact.has_value();
   if (contact) result.contact = *contact;
   if (!writes) return result;
-  result.output_error = fields.error();
+  result.output_error = !fields.error().empty() ? fields.error() : trajectories.error();
   const auto output_failed = [&](const std::string& what) {
     observer.warned(what);
     if (result.output_error.empty()) result.output_error = what;
@@ -652,6 +772,10 @@ RunResult run(Model& model, const RunSettings& settings, RunObserver* watcher) {
     ReportInfo report = report_info(model, settings);
     if (result.contact_table) report.files.push_back("contact.csv");
     if (fields.active()) report.files.push_back("fields.pvd");
+    if (trajectories.active()) {
+      report.files.push_back("trajectories.csv");
+      report.files.push_back("trajectories.pvd");
+    }
     if (bodies) report.bodies = &bodies->snapshots();
     write_report(dir, report, result.summary);
   } catch (const std::exception& e) {

@@ -4,7 +4,8 @@
 //             equilibrium    analysis), each accepted step measured by the
 //                            Recorder
 //         ──> history.csv (a row every output.every steps), VTU fields,
-//             contact.csv, summary.json, report.html in settings.out_dir
+//             trajectories (particles, tracked node sets), contact.csv,
+//             summary.json, report.html in settings.out_dir
 //
 // The scheme is named in the settings and its stepper made here, after the
 // equilibrium of [statics] (which adds and removes constraints of its own).
@@ -31,6 +32,7 @@
 #include "verify/contact_pressure.hpp"
 #include "verify/recorder.hpp"
 #include "verify/summary.hpp"
+#include "verify/vtu.hpp"
 
 namespace emdae {
 
@@ -39,11 +41,17 @@ struct OutputSettings {
   // VTU fields of the bodies every `vtu_every` steps (and the first and last);
   // -1: automatic (about 100 files over the run), 0: none.
   long vtu_every = -1;
+  // How the VTU arrays are written: compressed binary, or ASCII for reading by eye.
+  VtuFormat vtu_format = VtuFormat::Binary;
   // Times at which the report draws the bodies (snapshots); empty: chosen
   // from the run (before, during and after each contact window).
   std::vector<double> snapshots;
   // Frames of the report's animation of the bodies over the run (0: none).
   int animation_frames = 48;
+  // Node sets "body.set" of FE bodies whose nodes' trajectories are written
+  // with the particles' (trajectories.csv at the history's times, VTK points
+  // at the fields' steps: verify/trajectories.hpp).
+  std::vector<std::string> track;
 };
 
 /// An equilibrium solved before the dynamics, or the whole of a static
@@ -123,6 +131,7 @@ struct RunResult {
   Summary summary;                             // summary.status says how it ended
   State state;                                 // the last state reached
   bool fields = false, contact_table = false;  // fields.pvd, contact.csv written
+  bool trajectories = false;                   // trajectories.csv and .pvd written
   /// The rows of contact.csv (whether or not it was written); empty when the
   /// model has no contact or the pressure could not be computed.
   std::vector<ContactNode> contact;
@@ -136,9 +145,9 @@ void create_output_folder(const std::string& dir);
 /// An output folder owned by one run: created, locked (flock on
 /// DIR/.emdae.lock, released when this is destroyed or the process ends),
 /// and cleared of an earlier run's output (history.csv, summary.json,
-/// report.html, contact.csv, fields.pvd, fields/, checkpoint/, temporary
-/// files). Throws OutputError when another run holds the folder, or when it
-/// holds files emdae did not write and `force` is false.
+/// report.html, contact.csv, fields.pvd, fields/, trajectories.csv,
+/// trajectories.pvd, trajectories/, checkpoint/, temporary files). Throws OutputError when another
+/// run holds the folder, or when it holds files emdae did not write and `force` is false.
 class OutputFolder {
  public:
   /// `clean` false: keep what is there (a resumed run).

@@ -31,7 +31,10 @@
 //                  tolerance, max_steps, newton_tolerance, increments,
 //                  load_time: equilibrium first (or only, without [time])
 //   [output]       every (history row every N steps, default 1), vtu_every (VTU
-//                  fields of FE bodies every N steps; default about 100 files, 0: none)
+//                  fields of FE bodies every N steps; default about 100 files, 0: none),
+//                  vtu_format ("binary": compressed, the default; "ascii")
+//                  track = ["body.set", ...] (node sets whose trajectories are
+//                  written with the particles')
 //   [limits]       max_steps (default 1e7), max_memory_mb (default 4096): a run
 //                  that would need more is refused before anything is built
 //   [tolerances]   energy_rel, energy_balance_rel, linear_momentum,

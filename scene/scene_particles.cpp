@@ -1,5 +1,8 @@
 // [[particles]], [[springs]], [[links]], [[anchors]] and [gravity]: calls on
 // the Model (core/model.hpp), which makes the terms and checks them.
+#include <algorithm>
+#include <optional>
+
 #include "scene/scene_reader.hpp"
 
 namespace emdae::scene_reader {
@@ -87,7 +90,7 @@ void Builder::parse_link(const Fields& f) {
 // rollers about the point, which keep every constraint invariant under
 // rotations about it; the bearing on rollers, examples/bearing_rollers.toml).
 void Builder::parse_anchor(const Fields& f) {
-  f.only({"particle", "nodes", "point", "length"});
+  f.only({"particle", "nodes", "point", "length", "path"});
   const int dim = model().dim();
   if (f.has("particle") == f.has("nodes"))
     f.fail_key(f.has("nodes") ? "nodes" : "particle",
@@ -101,6 +104,10 @@ void Builder::parse_anchor(const Fields& f) {
       warn(f.where(), "initial velocity of " + what + " changes the length of its anchor link");
   };
   if (f.has("nodes")) {
+    if (f.has("path"))
+      f.fail_key("path",
+                 "a moving anchor point is for a particle, not a node set ([[dirichlet]] "
+                 "prescribes a node set's motion)");
     if (f.has("length"))
       f.fail_key("length",
                  "each node of a set keeps its initial distance; length is for a particle");
@@ -115,6 +122,60 @@ void Builder::parse_anchor(const Fields& f) {
   }
   const Particle& p =
       particle(f, "particle", f.require("particle", "the name of the anchored particle"));
+  if (f.has("path")) {
+    // A driven support: the point moves by the displacement table u(t),
+    // p(t) = point + u(t); the initial velocity must match the support's.
+    const Fields t =
+        f.table("path", "{times = [...], x = [...], y = [...], interpolation = \"cubic\"}",
+                "an anchor path");
+    const std::vector<std::string> axes = {"x", "y", "z"};
+    std::vector<std::string> keys = {"times", "interpolation"};
+    for (int d = 0; d < dim; ++d) keys.push_back(axes[static_cast<std::size_t>(d)]);
+    t.only(keys);
+    const std::vector<double> times = t.numbers("times", "increasing times, a list of numbers");
+    for (std::size_t i = 1; i < times.size(); ++i)
+      if (!(times[i] > times[i - 1]))
+        t.fail_key("times", "must increase strictly, received " + show(*t.find("times")));
+    std::vector<std::vector<double>> values;
+    for (int d = 0; d < dim; ++d) {
+      const std::string& k = axes[static_cast<std::size_t>(d)];
+      values.push_back(t.has(k) ? t.numbers(k, "displacements at those times")
+                                : std::vector<double>(times.size(), 0.0));
+      if (values.back().size() != times.size())
+        t.fail_key(k, fmt::format("must have as many entries as times ({}), received {}",
+                                  times.size(), show(*t.find(k))));
+    }
+    auto interpolation = AnchorPath::Interpolation::Cubic;
+    const std::vector<std::string> kinds = {"linear", "cubic", "periodic"};
+    if (const auto kind = t.optional_string("interpolation")) {
+      const auto it = std::find(kinds.begin(), kinds.end(), *kind);
+      if (it == kinds.end())
+        t.fail_key("interpolation", "unknown interpolation, received " +
+                                        show(*t.find("interpolation")) +
+                                        hint(*kind, kinds, "interpolations"));
+      interpolation = static_cast<AnchorPath::Interpolation>(it - kinds.begin());
+    }
+    const std::size_t min_points = interpolation == AnchorPath::Interpolation::Linear ? 2 : 3;
+    if (times.size() < min_points)
+      t.fail_key("times", fmt::format("needs at least {} times for {} interpolation, received {}",
+                                      min_points, kinds[static_cast<std::size_t>(interpolation)],
+                                      show(*t.find("times"))));
+    if (interpolation == AnchorPath::Interpolation::Periodic)
+      for (int d = 0; d < dim; ++d)
+        if (values[static_cast<std::size_t>(d)].front() !=
+            values[static_cast<std::size_t>(d)].back())
+          t.fail_key(axes[static_cast<std::size_t>(d)],
+                     "a periodic path needs equal first and last values, received " +
+                         show(*t.find(axes[static_cast<std::size_t>(d)])));
+    std::optional<AnchorPath> path;
+    model_call(f, [&] { path.emplace(point, times, values, interpolation); });
+    model_call(f, [&] { model().add_moving_anchor(p.name, *path, optional_length(f, "length")); });
+    const Vec d = p.position - path->position(0.0), dv = p.velocity - path->velocity(0.0);
+    if (std::abs(d.dot(dv)) > 1e-9 * d.norm() * (dv.norm() + path->velocity(0.0).norm()))
+      warn(f.where(),
+           "initial velocity of '" + p.name + "' changes its distance to the moving anchor point");
+    return;
+  }
   model_call(f, [&] { model().add_anchor(p.name, point, optional_length(f, "length")); });
   check_velocity(p.position, p.velocity, "'" + p.name + "'");
 }

@@ -1,6 +1,7 @@
 // The sections that set up the run rather than the model: [scene], [time],
 // [scheme] (with [scheme.ida] and [scheme.galpha]), [statics], [output],
 // [tolerances]. They fill RunSettings (run/run.hpp) under the same names.
+#include <algorithm>
 #include <cctype>
 
 #include "integrators/contact_step.hpp"
@@ -220,7 +221,7 @@ void Builder::parse_statics(const Fields& f) {
 }
 
 void Builder::parse_output(const Fields& f) {
-  f.only({"every", "vtu_every", "snapshots", "animation_frames"});
+  f.only({"every", "vtu_every", "vtu_format", "snapshots", "animation_frames", "track"});
   const long every = f.integer("every", 1);
   if (every < 1) f.fail_key("every", "must be at least 1, received " + std::to_string(every));
   settings().output.every = static_cast<int>(std::min<long>(every, 1L << 30));
@@ -229,6 +230,15 @@ void Builder::parse_output(const Fields& f) {
     f.fail_key("vtu_every",
                "must be 0 (no fields) or at least 1, received " + std::to_string(vtu_every));
   settings().output.vtu_every = vtu_every;
+  if (const auto format = f.optional_string("vtu_format")) {
+    try {
+      settings().output.vtu_format = parse_vtu_format(*format);
+    } catch (const std::invalid_argument&) {
+      f.fail_key("vtu_format", "must be \"binary\" or \"ascii\", received " +
+                                   show(*f.find("vtu_format")) +
+                                   hint(*format, {"binary", "ascii"}, "formats"));
+    }
+  }
   if (f.has("snapshots")) {
     const std::vector<double> times =
         f.numbers("snapshots", "times at which the report draws the bodies");
@@ -241,6 +251,20 @@ void Builder::parse_output(const Fields& f) {
   }
   settings().output.animation_frames = static_cast<int>(
       f.integer_in("animation_frames", settings().output.animation_frames, 0, 200));
+  // Node sets whose nodes' trajectories are written with the particles'.
+  if (const auto* n = f.find("track")) {
+    const auto* a = n->as_array();
+    if (!a)
+      f.fail_at(*n, "track",
+                "must be a list of node sets [\"body.set\", ...], received " + show_typed(*n));
+    for (std::size_t i = 0; i < a->size(); ++i) {
+      const std::string set = set_ref(f, "track", *a->get(i), Model::SetKind::Nodes);
+      auto& track = settings().output.track;
+      if (std::find(track.begin(), track.end(), set) != track.end())
+        f.fail_at(*a->get(i), "track", "names node set '" + set + "' twice");
+      track.push_back(set);
+    }
+  }
 }
 
 void Builder::parse_tolerances(const Fields& f) {

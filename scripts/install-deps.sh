@@ -6,12 +6,17 @@ set -euo pipefail
 packages=(
   build-essential cmake pkg-config
   libsundials-dev libeigen3-dev libsuitesparse-dev libgsl-dev
-  libtomlplusplus-dev libcli11-dev libfmt-dev nlohmann-json3-dev
+  libtomlplusplus-dev libcli11-dev libfmt-dev nlohmann-json3-dev zlib1g-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   python3 python3-meshio python3-numpy gnuplot-nox
   python3-dev pybind11-dev python3-pytest python3-matplotlib
+  libopenmpi-dev openmpi-bin
 )
 if [[ "${EMDAE_BROWSER_TESTS:-1}" == 1 ]]; then packages+=(chromium); fi
+# VTK's own reader (ParaView's) for the VTU tests (tests/test_report.cpp; ~230 MB).
+if [[ "${EMDAE_VTK_TESTS:-1}" == 1 ]]; then packages+=(python3-vtk9); fi
+# GetFEM for bench/ring_vs_getfem.py (the side-by-side timing of issue 14): on request.
+if [[ "${EMDAE_GETFEM:-0}" == 1 ]]; then packages+=(python3-getfem); fi
 # The fuzz targets (fuzz/, cmake --preset fuzz): clang with libFuzzer.
 if [[ "${EMDAE_FUZZ:-0}" == 1 ]]; then packages+=(clang-14 libclang-rt-14-dev); fi
 

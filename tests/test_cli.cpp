@@ -201,6 +201,12 @@ TEST(Cli, RunWritesSummaryAndHistory) {
   EXPECT_EQ(s["checks_pass"], true);
   EXPECT_FALSE(fs::exists(dir / "o/summary.json.tmp"));
 
+  // The particles' trajectories (3D), listed with the outputs.
+  EXPECT_NE(r.output.find("trajectories.csv,trajectories.pvd}"), std::string::npos) << r.output;
+  const auto traj = read_lines(dir / "o/trajectories.csv");
+  ASSERT_EQ(traj.size(), 1u + 4u * 501u);  // header, 4 particles at 501 times
+  EXPECT_EQ(traj[0], "t,point,x,y,z,vx,vy,vz");
+
   const auto lines = read_lines(dir / "o/history.csv");
   ASSERT_EQ(lines.size(), 1u + 1u + 500u);  // header, initial state, every step
   EXPECT_EQ(lines[0], kHeader3D);
@@ -311,6 +317,22 @@ TEST(Cli, CheckShowsWhatWouldBeBuiltAndWritesNothing) {
                         "dead load 2", "em", "dt = 0.01"})
     EXPECT_NE(r.output.find(s), std::string::npos) << s << " in\n" << r.output;
   EXPECT_TRUE(fs::is_empty(dir.path()));
+}
+
+// --verbose (formerly the environment variable EMDAE_STATICS_PRINT): every
+// pseudo step of the static solve on stderr; nothing of it without the flag.
+TEST(Cli, VerbosePrintsThePseudoStepsOfTheStaticSolve) {
+  TempDir dir;
+  const Result quiet = emdae("run " + quote(example("patch_test")) + " -q --out a", dir.path());
+  ASSERT_EQ(quiet.code, 0) << quiet.output;
+  EXPECT_EQ(quiet.output.find("statics: step"), std::string::npos) << quiet.output;
+  const Result r =
+      emdae("run " + quote(example("patch_test")) + " -q --verbose --out b", dir.path());
+  ASSERT_EQ(r.code, 0) << r.output;
+  for (const char* s : {"statics: step 1 accepted, pseudo dt", "Newton iterations (residual"})
+    EXPECT_NE(r.output.find(s), std::string::npos) << s << " in\n" << r.output;
+  const Result help = emdae("help run");
+  EXPECT_NE(help.output.find("--verbose"), std::string::npos) << help.output;
 }
 
 // --- the writers of verify/ ---------------------------------------------------------

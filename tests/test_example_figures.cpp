@@ -45,6 +45,8 @@ const std::vector<ExampleRun> kRuns = {
     {"bearing", "bearing", "--t-end 1"},
     {"bearing_rollers", "bearing_rollers", "--t-end 1"},
     {"double_pendulum", "double_pendulum", ""},
+    {"driven_pendulum", "driven_pendulum", ""},
+    {"driven_pendulum ida", "driven_pendulum", "--t-end 2 --scheme ida"},
     {"elastic_pendulum", "elastic_pendulum", ""},
     {"four_particle", "four_particle", ""},
     {"free_ring", "free_ring", ""},

@@ -16,6 +16,7 @@
 #include "scene/scene.hpp"
 #include "temp_dir.hpp"
 #include "verify/recorder.hpp"
+#include "verify/vtu.hpp"
 
 namespace emdae {
 namespace {
@@ -179,6 +180,15 @@ std::vector<Malformed> malformed_scenes() {
        kValid + "[output]\nevery = 0\n",
        "every",
        {"key 'output.every'", "received 0"}},
+      {"output_vtu_format_unknown",
+       kValid + "[output]\nvtu_format = \"asci\"\n",
+       "vtu_format",
+       {"key 'output.vtu_format'", "\"binary\" or \"ascii\"", "received \"asci\"",
+        "did you mean 'ascii'?"}},
+      {"output_vtu_format_not_string",
+       kValid + "[output]\nvtu_format = 1\n",
+       "vtu_format",
+       {"key 'output.vtu_format'", "must be a string", "received integer 1"}},
       {"tolerance_negative",
        kValid + "[tolerances]\nenergy_rel = -1e-9\n",
        "energy_rel",
@@ -197,6 +207,46 @@ std::vector<Malformed> malformed_scenes() {
            "[[anchors]]\nparticle = \"a\"\npoint = [0.0, 1.0]\n",
        "particle = \"a\"",
        {"key 'anchors[0].particle'", "fixed", "received \"a\""}},
+      {"anchor_path_periodic_open",
+       kValid + "[[anchors]]\nparticle = \"a\"\npoint = [0.0, 1.0]\n" +
+           "path = { times = [0.0, 1.0, 2.0], x = [0.0, 0.1, 0.2], interpolation = \"periodic\" "
+           "}\n",
+       "path = {",
+       {"key 'anchors[0].path.x'", "equal first and last values", "received [0.0, 0.1, 0.2]"}},
+      {"anchor_path_interpolation_unknown",
+       kValid + "[[anchors]]\nparticle = \"a\"\npoint = [0.0, 1.0]\n" +
+           "path = { times = [0.0, 1.0, 2.0], y = [0.0, 0.1, 0.2], interpolation = \"spline\" }\n",
+       "path = {",
+       {"key 'anchors[0].path.interpolation'", "unknown interpolation", "received \"spline\""}},
+      {"anchor_path_short_values",
+       kValid + "[[anchors]]\nparticle = \"a\"\npoint = [0.0, 1.0]\n" +
+           "path = { times = [0.0, 1.0, 2.0], x = [0.0, 0.1] }\n",
+       "path = {",
+       {"key 'anchors[0].path.x'", "as many entries as times (3)"}},
+      {"anchor_path_times_not_increasing",
+       kValid + "[[anchors]]\nparticle = \"a\"\npoint = [0.0, 1.0]\n" +
+           "path = { times = [0.0, 1.0, 1.0], x = [0.0, 0.1, 0.2] }\n",
+       "path = {",
+       {"key 'anchors[0].path.times'", "increase strictly", "received [0.0, 1.0, 1.0]"}},
+      {"anchor_path_too_few_times",
+       kValid + "[[anchors]]\nparticle = \"a\"\npoint = [0.0, 1.0]\n" +
+           "path = { times = [0.0, 1.0], x = [0.0, 0.1] }\n",
+       "path = {",
+       {"key 'anchors[0].path.times'", "at least 3 times for cubic", "received [0.0, 1.0]"}},
+      {"anchor_path_not_a_table",
+       kValid + "[[anchors]]\nparticle = \"a\"\npoint = [0.0, 1.0]\npath = [0.0, 1.0]\n",
+       "path = [",
+       {"key 'anchors[0].path'", "must be a table", "received array [0.0, 1.0]"}},
+      {"anchor_path_z_in_2d",
+       kValid + "[[anchors]]\nparticle = \"a\"\npoint = [0.0, 1.0]\n" +
+           "path = { times = [0.0, 1.0, 2.0], z = [0.0, 0.1, 0.2] }\n",
+       "path = {",
+       {"key 'anchors[0].path.z'", "unknown key", "received [0.0, 0.1, 0.2]"}},
+      {"anchor_path_length_not_the_distance",
+       kValid + "[[anchors]]\nparticle = \"a\"\npoint = [0.0, 1.0]\nlength = 2.0\n" +
+           "path = { times = [0.0, 1.0, 2.0], x = [0.0, 0.1, 0.2] }\n",
+       "length = 2.0",
+       {"key 'anchors[0].length'", "received 2.0"}},
       {"all_fixed",
        kTime + "[[particles]]\nname = \"a\"\nposition = [0.0, 0.0]\nfixed = true\n",
        "[[particles]]",
@@ -275,6 +325,7 @@ TEST(Scene, DefaultsApply) {
   EXPECT_EQ(scene->settings.schemes.newton.max_iterations, 20);
   EXPECT_FALSE(scene->settings.schemes.newton.line_search);
   EXPECT_EQ(scene->settings.output.every, 1);
+  EXPECT_EQ(scene->settings.output.vtu_format, VtuFormat::Binary);
   EXPECT_FALSE(scene->settings.tolerances.any());
   EXPECT_EQ(scene->system().n_nodes(), 2);
   EXPECT_EQ(scene->system().n_constraints(), 0);
@@ -357,14 +408,15 @@ TEST(Scene, TextWithSourceName) {
 TEST(SceneOverrides, ReplaceAndAddValues) {
   TempDir dir;
   const std::string path = dir.write("o.toml", kValid);
-  const auto scene =
-      load_scene(path, {"time.dt=0.005", "scheme.name=midpoint", "particles[1].mass=3",
-                        "gravity.acceleration=[0, -1]", "output.every = 5"});
+  const auto scene = load_scene(
+      path, {"time.dt=0.005", "scheme.name=midpoint", "particles[1].mass=3",
+             "gravity.acceleration=[0, -1]", "output.every = 5", "output.vtu_format=ascii"});
   EXPECT_DOUBLE_EQ(scene->settings.time.dt, 0.005);
   EXPECT_EQ(scene->settings.scheme, "midpoint");
   EXPECT_DOUBLE_EQ(scene->system().lumped_mass()[2], 3.0);
   EXPECT_EQ(scene->system().potentials().size(), 2u);
   EXPECT_EQ(scene->settings.output.every, 5);
+  EXPECT_EQ(scene->settings.output.vtu_format, VtuFormat::Ascii);
 }
 
 TEST(SceneOverrides, AreValidatedAndNamed) {

@@ -58,7 +58,7 @@ void history_row(const Sample& s, int dim, bool external_work, bool contact,
   const Quantities& q = s.quantities;
   row.clear();
   row.insert(row.end(), {s.t, s.dt, q.kinetic, q.potential, q.total()});
-  if (external_work) row.push_back(s.external_work);
+  if (external_work) row.push_back(s.external_work + s.constraint_work);
   for (int d = 0; d < q.linear_momentum.size(); ++d) row.push_back(q.linear_momentum[d]);
   if (dim == 2) {
     row.push_back(q.angular_momentum[0]);

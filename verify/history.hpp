@@ -13,7 +13,8 @@
 // row (Sample::energy_error, ...): their maxima are the summary's figures
 // (the energy error: energy_balance_rel_error_max with loads), whether or
 // not the system conserves the momentum in question. With external loads (or an external-work hook)
-// a column external_work (cumulative W) follows total_energy. With contact
+// a column external_work (cumulative W) follows total_energy; with driven
+// constraints it includes their work (Sample::constraint_work). With contact
 // four columns end the row: active_contacts, contact_events (of the step
 // that led to the row), gap_violation_max (max |Phi| over the active
 // candidates) and penetration_max (max(0, -Phi) over the inactive ones).

@@ -78,6 +78,29 @@ Conservation conservation_of(const System& system) {
   c.angular = angular_causes.empty();
   if (!c.linear) c.linear_reason = reason(linear_causes);
   if (!c.angular) c.angular_reason = reason(angular_causes);
+  // Per axis: fixed dofs along it, loads with a resultant along it, and
+  // terms not invariant under a translation along it (a weight along y
+  // leaves x free; Term::translation_axes).
+  const int dim = system.dim();
+  std::vector<std::vector<std::string>> axis_causes(dim);
+  for (const PrescribedDof& p : system.prescribed())
+    add_unique(axis_causes[p.dof % dim], "fixed dofs along this axis");
+  for (const auto& load : system.loads()) {
+    const std::vector<bool> axes = load->resultant_axes(dim);
+    for (int d = 0; d < dim; ++d)
+      if (axes[d]) add_unique(axis_causes[d], "external loads with a resultant along this axis");
+  }
+  for (const auto* list : {&system.potentials(), &system.constraints()})
+    for (const auto& term : *list) {
+      const std::vector<bool> axes = term->translation_axes(dim);
+      for (int d = 0; d < dim; ++d)
+        if (!axes[static_cast<std::size_t>(d)])
+          add_unique(axis_causes[d], term_kind(*term) + " terms");
+    }
+  for (int d = 0; d < dim; ++d) {
+    c.linear_axes.push_back(axis_causes[d].empty());
+    c.linear_axis_reasons.push_back(axis_causes[d].empty() ? "" : reason(axis_causes[d]));
+  }
   return c;
 }
 
@@ -87,6 +110,9 @@ Recorder::Recorder(const System& system, const State& initial, ExternalWork exte
       conservation_(conservation_of(system)),
       has_loads_(!system.loads().empty()),
       has_contact_(system.n_unilateral() > 0) {
+  for (const auto& c : system.constraints())
+    if (c->depends_on_time()) has_driven_ = true;
+  has_work_ = has_loads_ || has_driven_;
   initial_.step = 0;
   initial_.t = initial.t;
   initial_.quantities = measure(system, initial.q, initial.v, initial.t);
@@ -98,6 +124,7 @@ Recorder::Recorder(const System& system, const State& initial, ExternalWork exte
   const double j_size = angular_momentum_scale(system, initial.q, initial.v);
   angular_scale_ = (j0 > 1e-12 * j_size) ? j0 : 0.0;
   impulse_ = Vec::Zero(q0.linear_momentum.size());
+  linear_axis_error_max_ = Vec::Zero(q0.linear_momentum.size());
   angular_impulse_ = Vec::Zero(q0.angular_momentum.size());
   update_maxima(initial_);
   last_ = initial_;
@@ -115,6 +142,7 @@ const Sample& Recorder::observe(const State& state, const AcceptedStep& step) {
   // their energy balance; a hook, when given, says it instead.
   s.external_work =
       external_work_ ? external_work_(state) : last_.external_work + step.stats.external_work;
+  s.constraint_work = last_.constraint_work + step.stats.constraint_work;
   s.contact_events = step.stats.contact_events;
   measure_contact(state, s);
   newton_iterations_ += s.newton_iterations;
@@ -155,8 +183,9 @@ void Recorder::measure_contact(const State& state, Sample& s) {
 }
 
 void Recorder::track_load_free(const Sample& previous, const Sample& s) {
-  if (!has_loads_) return;
-  if (!load_free_ || !load_free_(previous.t, s.t)) {
+  if (!has_work_) return;
+  // A driven constraint works at every step: no interval is free of it.
+  if (has_driven_ || !load_free_ || !load_free_(previous.t, s.t)) {
     in_free_ = false;
     return;
   }
@@ -196,34 +225,41 @@ void Recorder::track_balance(const AcceptedStep& step, const Sample& s) {
 void Recorder::update_maxima(Sample& s) {
   const Quantities& q0 = initial_.quantities;
   const Quantities& q = s.quantities;
-  // The energy balance: what the loads put in since t_0 is not an error.
-  const double work = s.external_work - initial_.external_work;
+  // The energy balance: what the loads and the driven constraints put in
+  // since t_0 is not an error.
+  const double work = s.external_work - initial_.external_work + s.constraint_work;
   const double drift = std::abs(q.total() - q0.total() - work);
   // With loads, a run may start from rest and unstressed (H_0 = 0): the
   // balance is then measured against the largest energy the run has held.
-  if (has_loads_)
+  if (has_work_)
     balance_scale_ = std::max(
         {balance_scale_, energy_scale_, q.kinetic + std::abs(q.potential), std::abs(work)});
-  const double scale = has_loads_ ? balance_scale_ : energy_scale_;
+  const double scale = has_work_ ? balance_scale_ : energy_scale_;
   s.energy_error = scale > 0 ? drift / scale : drift;
   s.linear_momentum_error = (q.linear_momentum - q0.linear_momentum).norm();
   const double dj = (q.angular_momentum - q0.angular_momentum).norm();
   s.angular_momentum_error = angular_scale_ > 0 ? dj / angular_scale_ : dj;
   keep_max(balance_error_max_, s.energy_error);
-  if (!has_loads_) energy_error_max_ = balance_error_max_;
+  if (!has_work_) energy_error_max_ = balance_error_max_;
   keep_max(linear_error_max_, s.linear_momentum_error);
+  for (Eigen::Index d = 0; d < linear_axis_error_max_.size(); ++d)
+    keep_max(linear_axis_error_max_[d], std::abs(q.linear_momentum[d] - q0.linear_momentum[d]));
   keep_max(angular_error_max_, s.angular_momentum_error);
   keep_max(constraint_max_, q.phi_max);
   if (s.step == 0) angular_size_max_ = q.angular_momentum.norm();
 }
 
 double Recorder::energy_rel_error_max() const {
-  if (!has_loads_) return energy_error_max_;
+  if (!has_work_) return energy_error_max_;
   return free_intervals_ > 0 ? free_error_max_ : balance_error_max_;
 }
 
 std::string Recorder::energy_note() const {
-  if (!has_loads_) return "";
+  if (has_driven_)
+    return "not conserved: driven (time-dependent) constraints do work, int lambda . dPhi/dt "
+           "dt (constraint_work); this is the energy balance error |H - H_0 - W| with W the "
+           "work of loads and driven constraints (energy_balance_rel_error_max)";
+  if (!has_work_) return "";
   if (free_intervals_ == 0)
     return "no load-free interval: this is the energy balance error |H - H_0 - W| "
            "(energy_balance_rel_error_max)";
@@ -243,6 +279,12 @@ std::optional<double> Recorder::energy_balance_rel_error_max() const {
 std::optional<double> Recorder::linear_momentum_error_max() const {
   if (!conservation_.linear) return std::nullopt;
   return linear_error_max_;
+}
+
+std::optional<double> Recorder::linear_momentum_axis_error_max(int d) const {
+  if (d < 0 || d >= linear_axis_error_max_.size() || !conservation_.linear_axes[d])
+    return std::nullopt;
+  return linear_axis_error_max_[d];
 }
 
 std::optional<double> Recorder::angular_momentum_rel_error_max() const {
@@ -292,6 +334,7 @@ void put_sample(std::ostream& out, const Sample& s) {
   put(out, s.newton_iterations);
   put(out, s.cutbacks);
   put(out, s.external_work);
+  put(out, s.constraint_work);
   put(out, s.energy_error);
   put(out, s.linear_momentum_error);
   put(out, s.angular_momentum_error);
@@ -315,6 +358,7 @@ Sample get_sample(std::istream& in) {
   s.newton_iterations = get<int>(in);
   s.cutbacks = get<int>(in);
   s.external_work = get<double>(in);
+  s.constraint_work = get<double>(in);
   s.energy_error = get<double>(in);
   s.linear_momentum_error = get<double>(in);
   s.angular_momentum_error = get<double>(in);
@@ -341,6 +385,7 @@ void Recorder::save(std::ostream& out) const {
   put(out, free_intervals_);
   put_vec(out, impulse_);
   put_vec(out, angular_impulse_);
+  put_vec(out, linear_axis_error_max_);
   put(out, impulses_known_);
   put(out, active_max_);
   put(out, contact_events_);
@@ -367,6 +412,7 @@ void Recorder::restore(std::istream& in) {
   free_intervals_ = get<int>(in);
   impulse_ = get_vec(in);
   angular_impulse_ = get_vec(in);
+  linear_axis_error_max_ = get_vec(in);
   impulses_known_ = get<bool>(in);
   active_max_ = get<int>(in);
   contact_events_ = get<long>(in);

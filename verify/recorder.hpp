@@ -22,6 +22,12 @@
 //                                  of the interval; the balance error when
 //                                  the run has no such interval.
 //
+// Driven constraints (a term with Term::depends_on_time(): a moving anchor
+// point) do work too: C_n = sum of StepStats::constraint_work, int lambda .
+// dPhi/dt dt. The system then conserves no energy: every step counts as
+// loaded (no load-free interval), and the balance is
+// |H_n - H_0 - (W_n - W_0) - C_n| / E_scale.
+//
 // Momentum errors are only meaningful when the system has the symmetry that
 // conserves them (System::symmetry(), and no loads); otherwise they are
 // reported as absent, with the reason. Supports and loads do not break the
@@ -62,6 +68,9 @@ struct Sample {
   int newton_iterations = 0;
   int cutbacks = 0;            // failed attempts before this step was accepted
   double external_work = 0.0;  // cumulative W_ext(t); 0 without loads or hook
+  // Cumulative work of the driven (time-dependent) constraints,
+  // sum of StepStats::constraint_work; 0 without them.
+  double constraint_work = 0.0;
   // The errors of this state, as the maxima of the run take them: the energy
   // (balance) error |H - H_0 - (W - W_0)| / scale (absolute when the scale
   // is zero), |L - L_0|, and |J - J_0| / |J_0| (absolute when J_0 ~ 0).
@@ -86,6 +95,12 @@ struct Conservation {
   bool linear_balance = true;
   bool angular_balance = true;
   std::string linear_balance_reason, angular_balance_reason;
+  // Each component of the linear momentum on its own (x, y[, z]): a load or
+  // support along y only (gravity, a roller) leaves p_x conserved. Detected
+  // from the loads' resultants (Load::resultant_axes), the prescribed dofs'
+  // axes and the terms' symmetry.
+  std::vector<bool> linear_axes;
+  std::vector<std::string> linear_axis_reasons;  // "not conserved: ..." per broken axis
 };
 
 Conservation conservation_of(const System& system);
@@ -111,7 +126,11 @@ class Recorder {
   const Sample& initial() const { return initial_; }
   const Sample& last() const { return last_; }
   const Conservation& conservation() const { return conservation_; }
-  bool has_external_work() const { return static_cast<bool>(external_work_) || has_loads_; }
+  bool has_external_work() const {
+    return static_cast<bool>(external_work_) || has_loads_ || has_driven_;
+  }
+  /// Whether a constraint depends on time explicitly (a driven constraint).
+  bool has_driven_constraints() const { return has_driven_; }
   bool has_contact() const { return has_contact_; }
 
   /// Relative unless the initial energy scale is zero (then absolute). With
@@ -147,6 +166,9 @@ class Recorder {
   /// Empty when the system does not conserve the quantity.
   std::optional<double> linear_momentum_error_max() const;
   std::optional<double> angular_momentum_rel_error_max() const;
+  /// max_n |L_n,d - L_0,d|, the error of component d alone; empty when that
+  /// component is not conserved (conservation().linear_axis_reasons[d]).
+  std::optional<double> linear_momentum_axis_error_max(int d) const;
   /// False when |J_0| is at round-off level and the error is absolute.
   bool angular_momentum_error_is_relative() const { return angular_scale_ > 0.0; }
 
@@ -176,6 +198,8 @@ class Recorder {
   Conservation conservation_;
   Sample initial_, last_;
   bool has_loads_ = false, has_contact_ = false;
+  bool has_driven_ = false;     // a time-dependent constraint: it does work
+  bool has_work_ = false;       // loads or driven constraints
   double energy_scale_ = 0.0;   // 0: report the absolute energy error
   double balance_scale_ = 0.0;  // with loads: the largest energy held so far
   double angular_scale_ = 0.0;  // 0: report the absolute angular momentum error
@@ -198,6 +222,7 @@ class Recorder {
   double contact_last_ = std::numeric_limits<double>::quiet_NaN();
   double linear_error_max_ = 0.0;
   double angular_error_max_ = 0.0;
+  Vec linear_axis_error_max_;  // per component
   double constraint_max_ = 0.0;
   long newton_iterations_ = 0;
   int newton_max_per_step_ = 0;

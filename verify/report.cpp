@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <ctime>
 #include <filesystem>
 #include <fstream>
 #include <limits>
@@ -299,7 +300,10 @@ std::string page_foot(const std::vector<std::string>& files) {
                          html_escape(f));
   const std::time_t now = std::time(nullptr);
   char stamp[64] = "";
-  std::strftime(stamp, sizeof stamp, "%Y-%m-%d %H:%M:%S", std::localtime(&now));
+  // localtime_r: std::localtime's result is shared by every thread, and the
+  // runs of a comparison write their reports at once.
+  std::tm local{};
+  if (::localtime_r(&now, &local)) std::strftime(stamp, sizeof stamp, "%Y-%m-%d %H:%M:%S", &local);
   return fmt::format("<footer>Written by emdae {} on {}.{}</footer>\n</body>\n</html>\n",
                      EMDAE_VERSION, stamp, links.empty() ? "" : " Files: " + links + ".");
 }

@@ -6,9 +6,11 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <istream>
 #include <limits>
 #include <ostream>
 
+#include "verify/binary_io.hpp"
 #include "verify/page.hpp"
 #include "verify/study_detail.hpp"
 
@@ -133,6 +135,122 @@ void StudyRun::take(const Summary& s) {
   linear_momentum_error_max = s.linear_momentum_error_max;
   angular_momentum_rel_error_max = s.angular_momentum_rel_error_max;
   constraint_residual_max = s.constraint_residual_max;
+}
+
+namespace {
+
+void put_optional(std::ostream& out, const std::optional<double>& x) {
+  binary::put<char>(out, x ? 1 : 0);
+  binary::put(out, x ? *x : 0.0);
+}
+
+std::optional<double> get_optional(std::istream& in) {
+  const bool has = binary::get<char>(in) != 0;
+  const double x = binary::get<double>(in);
+  return has ? std::optional<double>(x) : std::nullopt;
+}
+
+void put_vecs(std::ostream& out, const std::vector<Vec>& v) {
+  binary::put<std::uint64_t>(out, v.size());
+  for (const Vec& x : v) binary::put_vec(out, x);
+}
+
+std::vector<Vec> get_vecs(std::istream& in) {
+  std::vector<Vec> v(binary::get<std::uint64_t>(in));
+  for (Vec& x : v) x = binary::get_vec(in);
+  return v;
+}
+
+void put_doubles(std::ostream& out, const std::vector<double>& v) {
+  binary::put<std::uint64_t>(out, v.size());
+  for (double x : v) binary::put(out, x);
+}
+
+std::vector<double> get_doubles(std::istream& in) {
+  std::vector<double> v(binary::get<std::uint64_t>(in));
+  for (double& x : v) x = binary::get<double>(in);
+  return v;
+}
+
+}  // namespace
+
+void save_run(std::ostream& out, const StudyRun& r) {
+  using namespace binary;
+  put_string(out, r.scheme);
+  put(out, r.dt);
+  put_optional(out, r.tol);
+  for (bool b : {r.reference, r.reference_check, r.ran}) put<char>(out, b ? 1 : 0);
+  put_string(out, r.status);
+  put(out, r.steps);
+  put(out, r.iterations);
+  put(out, r.cpu_seconds);
+  put(out, r.energy_rel_error_max);
+  put_optional(out, r.linear_momentum_error_max);
+  put_optional(out, r.angular_momentum_rel_error_max);
+  put(out, r.constraint_residual_max);
+  put_vec(out, r.q_end);
+  const RunMeasures& m = r.measured;
+  put<char>(out, m.complete ? 1 : 0);
+  put_doubles(out, m.times);
+  put_vecs(out, m.positions);
+  put_optional(out, m.contact_first);
+  put_optional(out, m.contact_last);
+  put(out, m.active_at_end);
+  put<std::uint64_t>(out, m.groups.size());
+  for (const RigidMotion& g : m.groups) {
+    put(out, g.mass);
+    put_vecs(out, {g.centre, g.linear_momentum, g.angular_momentum});
+    for (double x : {g.kinetic, g.rigid_kinetic, g.momentum_scale, g.angular_scale}) put(out, x);
+  }
+  put(out, m.kinetic);
+  put(out, m.potential);
+  put(out, r.error);
+  put(out, r.error_rel);
+  put_optional(out, r.order);
+  put_doubles(out, r.measure_errors);
+}
+
+StudyRun load_run(std::istream& in) {
+  using namespace binary;
+  StudyRun r;
+  r.scheme = get_string(in);
+  r.dt = get<double>(in);
+  r.tol = get_optional(in);
+  for (bool* b : {&r.reference, &r.reference_check, &r.ran}) *b = get<char>(in) != 0;
+  r.status = get_string(in);
+  r.steps = get<long>(in);
+  r.iterations = get<long>(in);
+  r.cpu_seconds = get<double>(in);
+  r.energy_rel_error_max = get<double>(in);
+  r.linear_momentum_error_max = get_optional(in);
+  r.angular_momentum_rel_error_max = get_optional(in);
+  r.constraint_residual_max = get<double>(in);
+  r.q_end = get_vec(in);
+  RunMeasures& m = r.measured;
+  m.complete = get<char>(in) != 0;
+  m.times = get_doubles(in);
+  m.positions = get_vecs(in);
+  m.contact_first = get_optional(in);
+  m.contact_last = get_optional(in);
+  m.active_at_end = get<int>(in);
+  m.groups.resize(get<std::uint64_t>(in));
+  for (RigidMotion& g : m.groups) {
+    g.mass = get<double>(in);
+    const std::vector<Vec> v = get_vecs(in);
+    if (v.size() != 3) throw std::runtime_error("a study run's bytes are damaged");
+    g.centre = v[0];
+    g.linear_momentum = v[1];
+    g.angular_momentum = v[2];
+    for (double* x : {&g.kinetic, &g.rigid_kinetic, &g.momentum_scale, &g.angular_scale})
+      *x = get<double>(in);
+  }
+  m.kinetic = get<double>(in);
+  m.potential = get<double>(in);
+  r.error = get<double>(in);
+  r.error_rel = get<double>(in);
+  r.order = get_optional(in);
+  r.measure_errors = get_doubles(in);
+  return r;
 }
 
 std::vector<std::string> Study::notes() const {

@@ -130,6 +130,12 @@ struct Study {
   std::vector<MeasureSummary> measure_summaries() const;
 };
 
+/// A run, all of it, as bytes and back, the same bits (the runs of a study
+/// made by the other ranks of an MPI job travel so to rank 0). Not a
+/// portable format: read by the build that wrote it.
+void save_run(std::ostream& out, const StudyRun& run);
+StudyRun load_run(std::istream& in);
+
 /// max over nodes of |a_node - b_node| (nodes of `dimension` coordinates).
 double max_node_distance(const Vec& a, const Vec& b, int dimension);
 /// Diagonal of the axis-aligned bounding box of the nodes in q.

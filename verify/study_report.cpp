@@ -180,7 +180,8 @@ std::vector<Figure> study_figures(const Study& study) {
       "(error proportional to the tolerance)." +
       floor + failed;
   by_cpu.caption =
-      "Each point a run: its error at t_end against the process CPU time of its integration. "
+      "Each point a run: its error at t_end against the CPU time of its integration (its own "
+      "thread's). "
       "Lower left is better." +
       floor + failed;
   std::vector<Figure> figs;

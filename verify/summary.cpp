@@ -4,6 +4,7 @@
 #include <fmt/ostream.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cmath>
 #include <cstdio>
@@ -87,8 +88,20 @@ Summary summarize(const RunInfo& info, const System& system, const Recorder& rec
   s.energy_note = recorder.energy_note();
   s.energy_balance_rel_error_max = recorder.energy_balance_rel_error_max();
   s.external_work = recorder.last().external_work - recorder.initial().external_work;
+  if (recorder.has_driven_constraints()) s.constraint_work = recorder.last().constraint_work;
   s.linear_momentum_error_max = recorder.linear_momentum_error_max();
   s.linear_momentum_note = recorder.conservation().linear_reason;
+  // Not conserved as a whole, but maybe some component is (nothing pushes
+  // along that axis): then every component is reported on its own.
+  if (!s.linear_momentum_error_max && !info.static_analysis) {
+    std::vector<AxisMomentum> axes;
+    for (int d = 0; d < system.dim(); ++d)
+      axes.push_back({std::string(1, "xyz"[d]), recorder.linear_momentum_axis_error_max(d),
+                      recorder.conservation().linear_axis_reasons[d]});
+    if (std::any_of(axes.begin(), axes.end(),
+                    [](const AxisMomentum& a) { return a.error_max.has_value(); }))
+      s.linear_momentum_axes = std::move(axes);
+  }
   s.angular_momentum_rel_error_max = recorder.angular_momentum_rel_error_max();
   s.angular_momentum_note = recorder.conservation().angular_reason;
   s.angular_momentum_error_relative = recorder.angular_momentum_error_is_relative();
@@ -128,15 +141,46 @@ Summary summarize(const RunInfo& info, const System& system, const Recorder& rec
   };
   const std::string why =
       s.static_analysis ? "not applicable to a static analysis" : "not conserved by this system";
+  // A term with explicit time dependence does work on the system, so the
+  // energy is not conserved and energy_rel is skipped, not failed. A driven
+  // constraint's work is measured (constraint_work) and enters the balance,
+  // which is still checked; a time-dependent potential's is not, so with
+  // one the balance is skipped too.
+  std::string driven_constraint, driven_potential;
+  for (const auto& t : system.constraints())
+    if (t->depends_on_time() && driven_constraint.empty()) driven_constraint = t->describe();
+  for (const auto& t : system.potentials())
+    if (t->depends_on_time() && driven_potential.empty()) driven_potential = t->describe();
+  if (!driven_potential.empty() && !s.static_analysis)
+    s.energy_note = "includes the work of time-dependent potentials (" + driven_potential +
+                    "), which the report does not measure" +
+                    (s.energy_note.empty() ? "" : "; " + s.energy_note);
+  const std::string driven = driven_potential.empty() ? driven_constraint : driven_potential;
+  const auto unless = [&](bool skip, std::optional<double> x) {
+    return skip ? std::nullopt : dynamic(x);
+  };
+  const auto does_work = [&](const std::string& what) {
+    return s.static_analysis ? why : "a time-dependent term (" + what + ") does work on the system";
+  };
   if (tolerances.energy_rel)
-    s.checks.push_back(
-        make_check("energy_rel", dynamic(s.energy_rel_error_max), *tolerances.energy_rel, why));
+    s.checks.push_back(make_check("energy_rel", unless(!driven.empty(), s.energy_rel_error_max),
+                                  *tolerances.energy_rel,
+                                  driven.empty() ? why : does_work(driven)));
   if (tolerances.energy_balance_rel)
-    s.checks.push_back(make_check("energy_balance_rel", dynamic(s.energy_balance_rel_error_max),
-                                  *tolerances.energy_balance_rel, why));
+    s.checks.push_back(make_check("energy_balance_rel",
+                                  unless(!driven_potential.empty(), s.energy_balance_rel_error_max),
+                                  *tolerances.energy_balance_rel,
+                                  driven_potential.empty() ? why : does_work(driven_potential)));
   if (tolerances.linear_momentum)
     s.checks.push_back(make_check("linear_momentum", dynamic(s.linear_momentum_error_max),
                                   *tolerances.linear_momentum, why));
+  // The whole vector is not conserved but some component is (a weight or a
+  // roller along y leaves x free): each component gets a check, the
+  // conserved ones judged, the others skipped saying why.
+  if (tolerances.linear_momentum)
+    for (const AxisMomentum& a : s.linear_momentum_axes)
+      s.checks.push_back(make_check("linear_momentum_" + a.axis, a.error_max,
+                                    *tolerances.linear_momentum, a.note));
   if (tolerances.angular_momentum_rel)
     s.checks.push_back(make_check("angular_momentum_rel", dynamic(s.angular_momentum_rel_error_max),
                                   *tolerances.angular_momentum_rel, why));
@@ -276,9 +320,14 @@ nlohmann::ordered_json to_json(const Summary& s) {
   if (s.energy_balance_rel_error_max) {
     j["energy_balance_rel_error_max"] = *s.energy_balance_rel_error_max;
     j["external_work"] = s.external_work;
+    if (s.constraint_work) j["constraint_work"] = *s.constraint_work;
   }
   j["linear_momentum_error_max"] = optional_number(s.linear_momentum_error_max);
   if (!s.linear_momentum_note.empty()) j["linear_momentum_note"] = s.linear_momentum_note;
+  for (const AxisMomentum& a : s.linear_momentum_axes) {
+    j["linear_momentum_" + a.axis + "_error_max"] = optional_number(a.error_max);
+    if (!a.note.empty()) j["linear_momentum_" + a.axis + "_note"] = a.note;
+  }
   j["angular_momentum_rel_error_max"] = optional_number(s.angular_momentum_rel_error_max);
   if (!s.angular_momentum_note.empty()) j["angular_momentum_note"] = s.angular_momentum_note;
   j["linear_momentum_balance_error_max"] = optional_number(s.linear_momentum_balance_error_max);
@@ -309,7 +358,7 @@ void write_summary(const std::string& path, const Summary& summary) {
 }
 
 void print_summary(std::ostream& out, const Summary& s, const std::string& dir, bool fields,
-                   bool contact_table) {
+                   bool contact_table, bool trajectories) {
   const auto row = [&out](const std::string& label, const std::string& value) {
     // At least one space: "check angular_momentum_balance_rel" is longer than the column.
     fmt::print(out, "  {:<27} {}\n", label, value);
@@ -332,14 +381,24 @@ void print_summary(std::ostream& out, const Summary& s, const std::string& dir, 
     if (s.statics) row("statics", statics_text(*s.statics));
     // With loads the energy error is that of the load-free intervals, and the
     // balance H - H_0 = W is the figure for the rest.
+    // With driven constraints nothing is free of work: the balance is the figure.
     const bool loaded = s.energy_balance_rel_error_max.has_value() && !s.energy_note.empty();
-    row(loaded ? "energy error (load-free)"
-               : (s.energy_error_relative ? "energy rel. error" : "energy abs. error"),
-        fmt::format("{:.3e}", s.energy_rel_error_max));
+    if (s.constraint_work)
+      row("energy", "not conserved: driven constraints do work (balance below)");
+    else
+      row(loaded ? "energy error (load-free)"
+                 : (s.energy_error_relative ? "energy rel. error" : "energy abs. error"),
+          fmt::format("{:.3e}", s.energy_rel_error_max));
     if (s.energy_balance_rel_error_max)
-      row("energy balance error", fmt::format("{:.3e} (external work {:.6g})",
-                                              *s.energy_balance_rel_error_max, s.external_work));
+      row("energy balance error",
+          s.constraint_work
+              ? fmt::format("{:.3e} (external work {:.6g}, driven constraints' work {:.6g})",
+                            *s.energy_balance_rel_error_max, s.external_work, *s.constraint_work)
+              : fmt::format("{:.3e} (external work {:.6g})", *s.energy_balance_rel_error_max,
+                            s.external_work));
     row("lin. momentum error", maybe(s.linear_momentum_error_max, s.linear_momentum_note));
+    for (const AxisMomentum& a : s.linear_momentum_axes)
+      row("  component " + a.axis, maybe(a.error_max, a.note));
     if (!s.linear_momentum_error_max && s.linear_momentum_balance_error_max)
       row("lin. momentum balance", fmt::format("{:.3e}", *s.linear_momentum_balance_error_max));
     row("ang. momentum error", maybe(s.angular_momentum_rel_error_max, s.angular_momentum_note));
@@ -366,7 +425,8 @@ void print_summary(std::ostream& out, const Summary& s, const std::string& dir, 
     row("check " + c.name, verdict);
   }
   row("output", dir + "/{history.csv,summary.json,report.html" +
-                    (contact_table ? ",contact.csv" : "") + (fields ? ",fields.pvd" : "") + "}");
+                    (contact_table ? ",contact.csv" : "") + (fields ? ",fields.pvd" : "") +
+                    (trajectories ? ",trajectories.csv,trajectories.pvd" : "") + "}");
 }
 
 }  // namespace emdae

@@ -73,6 +73,14 @@ struct Check {
   std::string note;    // why it was skipped
 };
 
+/// One component of the linear momentum judged on its own (dynamic runs
+/// whose linear momentum as a whole is not conserved).
+struct AxisMomentum {
+  std::string axis;                 // "x", "y", "z"
+  std::optional<double> error_max;  // max |L_n,d - L_0,d|; empty: not conserved
+  std::string note;                 // why not
+};
+
 struct Summary {
   std::string scene, scheme, source;
   bool static_analysis = false;   // [statics] without [time]: no time steps
@@ -92,8 +100,14 @@ struct Summary {
   std::string energy_note;  // what energy_rel_error_max measures with loads
   std::optional<double> energy_balance_rel_error_max;  // with loads
   double external_work = 0.0;                          // W over the run
+  // With driven (time-dependent) constraints: their work over the run,
+  // int lambda . dPhi/dt dt, which the balance includes.
+  std::optional<double> constraint_work;
   std::optional<double> linear_momentum_error_max;
   std::string linear_momentum_note;
+  // Per component, when the whole is not conserved but some component is
+  // (empty otherwise, and in a static analysis).
+  std::vector<AxisMomentum> linear_momentum_axes;
   std::optional<double> angular_momentum_rel_error_max;
   bool angular_momentum_error_relative = true;  // false: |J_0| ~ 0, the error is absolute
   std::string angular_momentum_note;
@@ -137,7 +151,7 @@ nlohmann::ordered_json to_json(const Summary& summary);
 /// The summary as the table `emdae run` prints: one "label  value" row per
 /// figure, the checks, and the files written to `dir`.
 void print_summary(std::ostream& out, const Summary& summary, const std::string& dir,
-                   bool fields = false, bool contact_table = false);
+                   bool fields = false, bool contact_table = false, bool trajectories = false);
 
 /// Writes `summary` to `path` atomically; throws std::runtime_error on failure.
 void write_summary(const std::string& path, const Summary& summary);

@@ -262,18 +262,22 @@ def _raise_bad_input(code, err):
 
 
 def compare(scene=None, schemes=("em", "midpoint", "ida", "galpha"), *, overrides=None,
-            dt=None, t_end=None, out_dir=None):
+            dt=None, t_end=None, out_dir=None, jobs=None):
     """`emdae compare`: the scene run with each scheme. Returns a dict: "runs",
     one row per scheme (scheme, exit_code, message and, when it ran, its
     summary as a dict), "exit_code" (the command's), "out_dir" (None when
     out_dir was None: the runs went to a temporary folder, removed).
+    jobs: schemes run at once, each on a thread (None: the hardware
+    threads; 1: one after the other); the results do not depend on it.
     Bad input raises SceneError or InputError before anything is written."""
     scheme_list = schemes if isinstance(schemes, str) else ",".join(schemes)
+    n_jobs = _jobs(jobs)
 
     def command(folder, work):
         path, assignments = _scene_source(scene, overrides, folder)
         _check_scene(path, assignments)
-        return _emdae._compare(path, scheme_list, _text(dt), _text(t_end), work, assignments)
+        return _emdae._compare(path, scheme_list, _text(dt), _text(t_end), work, assignments,
+                               n_jobs)
 
     code, err, work, cleanup = _command(command, out_dir)
     try:
@@ -294,18 +298,21 @@ def compare(scene=None, schemes=("em", "midpoint", "ida", "galpha"), *, override
 
 def study(scene=None, schemes=("em", "midpoint", "galpha", "ida"), *, dts=None, tols=None,
           t_end=None, reference_dt=None, times=None, measures=None, reference_check=True,
-          overrides=None, out_dir=None):
+          overrides=None, out_dir=None, jobs=None):
     """`emdae study`: the scene per scheme over step sizes (ida: tolerances)
     against a fine reference. Returns study.json as a dict (its "runs" hold,
     per run, scheme, dt, tol, error, cpu_seconds, ...), with "table": the
-    rows of study.csv as dicts and "exit_code". out_dir as in compare()."""
+    rows of study.csv as dicts and "exit_code". out_dir and jobs as in
+    compare(): the figures but the CPU times do not depend on jobs."""
+    n_jobs = _jobs(jobs)
 
     def command(folder, work):
         path, assignments = _scene_source(scene, overrides, folder)
         _check_scene(path, assignments)
         return _emdae._study(path, schemes if isinstance(schemes, str) else ",".join(schemes),
                              _list(dts), _list(tols), _text(t_end), _text(reference_dt),
-                             _list(times), _list(measures), reference_check, work, assignments)
+                             _list(times), _list(measures), reference_check, work, assignments,
+                             n_jobs)
 
     code, err, work, cleanup = _command(command, out_dir)
     try:
@@ -320,6 +327,14 @@ def study(scene=None, schemes=("em", "midpoint", "galpha", "ida"), *, dts=None, 
         return result
     finally:
         cleanup()
+
+
+def _jobs(jobs):
+    if jobs is None:
+        return 0
+    if isinstance(jobs, bool) or not isinstance(jobs, int) or jobs < 1:
+        raise InputError(f"jobs: must be a whole number >= 1, received {jobs!r}")
+    return jobs
 
 
 def _text(x):

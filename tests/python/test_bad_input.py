@@ -98,3 +98,12 @@ def test_compare_and_study_refuse_bad_input_with_nothing_written(cli, tmp_path):
     with pytest.raises(emdae.InputError, match="--dts"):
         emdae.study(scene_file, ["em"], dts=[0.01, -1], out_dir=tmp_path / "s")
     assert not (tmp_path / "c").exists() and not (tmp_path / "s").exists()
+
+
+def test_an_unknown_vtu_format_is_refused_with_its_key():
+    settings = emdae.OutputSettings()
+    assert settings.vtu_format == "binary"
+    with pytest.raises(emdae.InputError, match="output.vtu_format: unknown VTU format 'xml'"):
+        settings.vtu_format = "xml"
+    settings.vtu_format = "ascii"
+    assert settings.vtu_format == "ascii"

@@ -40,3 +40,32 @@ def test_study_returns_errors_and_cpu_times_with_order_two_for_em(tmp_path):
     assert all(r["cpu_seconds"] >= 0 for r in runs)
     assert (tmp_path / "study.html").exists()
     assert any(row["scheme"] == "midpoint" for row in study["table"])
+
+
+def _without_cpu(x):
+    if isinstance(x, dict):
+        return {k: _without_cpu(v) for k, v in x.items() if "cpu" not in k and k != "messages"}
+    if isinstance(x, list):
+        return [_without_cpu(v) for v in x]
+    return x
+
+
+def test_study_on_two_threads_gives_the_figures_of_one(tmp_path):
+    # Runs at once end in another order; the figures (but the CPU times) and
+    # the table do not change, to the last bit.
+    scene_file = EXAMPLES / "elastic_pendulum.toml"
+    args = dict(dts=[0.01, 0.005], tols=[1e-4], t_end=1.0)
+    one = emdae.study(scene_file, ["em", "midpoint", "ida"], jobs=1, out_dir=tmp_path / "one",
+                      **args)
+    two = emdae.study(scene_file, ["em", "midpoint", "ida"], jobs=2, out_dir=tmp_path / "two",
+                      **args)
+    assert one["exit_code"] == 0 and one["complete"] and len(one["runs"]) == 5
+    assert all(r["status"] == "ok" for r in one["runs"])
+    del one["out_dir"], two["out_dir"]
+    assert _without_cpu(one) == _without_cpu(two)
+
+
+def test_jobs_must_be_a_positive_whole_number():
+    for jobs in (0, -1, 1.5, True):
+        with pytest.raises(emdae.InputError, match="jobs"):
+            emdae.compare(EXAMPLES / "double_pendulum.toml", ["em"], t_end=0.1, jobs=jobs)
