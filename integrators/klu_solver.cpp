@@ -1,9 +1,9 @@
 #include "integrators/klu_solver.hpp"
 
 #include <klu.h>
-#include <umfpack.h>
 #include <nvector/nvector_serial.h>
 #include <sunmatrix/sunmatrix_sparse.h>
+#include <umfpack.h>
 
 #include <algorithm>
 #include <stdexcept>
@@ -78,8 +78,8 @@ struct KluSolver::Impl {
   // UMFPACK: a fresh factorization on the kept analysis.
   int umf_factor(long* ap, long* ai, double* ax) {
     free_numeric();
-    const long status = umfpack_dl_numeric(ap, ai, ax, umf_symbolic, &umf_numeric, umf_control,
-                                           umf_info);
+    const long status =
+        umfpack_dl_numeric(ap, ai, ax, umf_symbolic, &umf_numeric, umf_control, umf_info);
     if (status == UMFPACK_WARNING_singular_matrix) {
       free_numeric();
       return SUNLS_LUFACT_FAIL;

@@ -39,13 +39,13 @@
 //
 // Large matrices: KLU is a left-looking sparse LU without dense kernels,
 // made for circuit matrices; on FE iteration matrices its factorization
-// grows like n^1.7..2 (docs/performance.md, "Linear solvers"). UMFPACK
-// (multifrontal, dense BLAS kernels on its frontal matrices, same AMD
-// ordering) factors a 10^5-dof block 1.6x and a 2*10^5-dof block 2.9x
-// faster than KLU refactors it. Backend::Auto takes KLU below
-// `umfpack_from` unknowns and UMFPACK from there on; each can be forced.
-// UMFPACK keeps its symbolic analysis while the pattern holds and factors
-// afresh (with its own pivoting) at every set-up.
+// grows like n^1.7..2 (docs/performance.md §11). UMFPACK (multifrontal,
+// dense BLAS kernels on its frontal matrices, same AMD ordering) factors a
+// 10^5-dof Q1 block 1.4x and a 2*10^5-dof block 2.0x faster than KLU
+// refactors it; below 5*10^4 KLU's refactorization is the faster.
+// Backend::Auto takes KLU below `umfpack_from` unknowns and UMFPACK from
+// there on; each can be forced. UMFPACK keeps its symbolic analysis while the
+// pattern holds and factors afresh (with its own pivoting) at every set-up.
 #pragma once
 
 #include <sundials/sundials_linearsolver.h>
@@ -67,9 +67,9 @@ class KluSolver {
   static constexpr long kUmfpackFrom = 50000;
 
   struct Counters {
-    long analyses = 0;          // symbolic analyses (a new pattern)
-    long factorizations = 0;    // numeric factorizations with pivoting
-    long refactorizations = 0;  // numeric refactorizations on the kept pivot order
+    long analyses = 0;                // symbolic analyses (a new pattern)
+    long factorizations = 0;          // numeric factorizations with pivoting
+    long refactorizations = 0;        // numeric refactorizations on the kept pivot order
     long umfpack_factorizations = 0;  // of the factorizations, by UMFPACK
   };
 

@@ -25,7 +25,8 @@ constexpr double kRoundOffStep = 1e-15;
 
 KluSolver::Counters sum(const KluSolver::Counters& a, const KluSolver::Counters& b) {
   return {a.analyses + b.analyses, a.factorizations + b.factorizations,
-          a.refactorizations + b.refactorizations};
+          a.refactorizations + b.refactorizations,
+          a.umfpack_factorizations + b.umfpack_factorizations};
 }
 
 }  // namespace

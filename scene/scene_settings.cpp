@@ -99,8 +99,8 @@ void Builder::parse_scheme(const Fields& f) {
   // The flat rtol, atol, max_order and rho_inf are the keys of the tables
   // [scheme.ida] and [scheme.galpha] as they were first written: still read.
   f.only({"name", "newton_tolerance", "newton_max_iterations", "line_search", "linear_solver",
-          "impact", "locate_impacts", "gap_tolerance", "ida", "galpha", "rtol", "atol",
-          "max_order", "rho_inf"});
+          "impact", "locate_impacts", "gap_tolerance", "ida", "galpha", "rtol", "atol", "max_order",
+          "rho_inf"});
   if (const auto name = f.optional_string("name")) {
     const auto known = known_schemes();
     if (std::find(known.begin(), known.end(), *name) == known.end()) {
