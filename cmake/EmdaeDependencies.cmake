@@ -29,6 +29,17 @@ if(NOT EMDAE_SUNDIALS_INDEX_IS_LONG)
   message(FATAL_ERROR "SUNDIALS must use 64-bit indices (sunindextype == long)")
 endif()
 
+# UMFPACK (SuiteSparse, libsuitesparse-dev): the multifrontal LU for large
+# matrices (integrators/klu_solver.hpp). SuiteSparse 5 ships no CMake config.
+find_path(UMFPACK_INCLUDE_DIR umfpack.h PATH_SUFFIXES suitesparse)
+find_library(UMFPACK_LIBRARY umfpack)
+if(NOT UMFPACK_INCLUDE_DIR OR NOT UMFPACK_LIBRARY)
+  message(FATAL_ERROR "UMFPACK not found: install libsuitesparse-dev")
+endif()
+add_library(emdae::umfpack INTERFACE IMPORTED)
+set_target_properties(emdae::umfpack PROPERTIES
+  INTERFACE_INCLUDE_DIRECTORIES "${UMFPACK_INCLUDE_DIR}"
+  INTERFACE_LINK_LIBRARIES "${UMFPACK_LIBRARY}")
 find_package(Threads REQUIRED)
 # MPI (Open MPI from Debian), optional: `mpirun -n N emdae study ...` shares
 # a study's runs among the ranks. Without it the build works and a study

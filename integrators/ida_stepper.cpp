@@ -271,7 +271,8 @@ void IdaStepper::Impl::allocate(double t, const Vec& y0) {
       check_ptr(SUNSparseMatrix(size, size, std::max<long>(1, jac.nonZeros()), CSC_MAT, ctx.get()),
                 "SUNSparseMatrix"));
   klu = std::make_unique<KluSolver>(ctx.get(), KluSolver::Ordering::Colamd,
-                                    KluSolver::Pivoting::EverySetup);
+                                    KluSolver::Pivoting::EverySetup, set.linear_solver,
+                                    set.umfpack_from);
 }
 
 // IDA's own first step makes ||h0 y'||_WRMS = 1/2, which at tight

@@ -28,6 +28,7 @@
 
 #include "core/gradient.hpp"
 #include "core/system.hpp"
+#include "integrators/klu_solver.hpp"
 #include "integrators/stepper.hpp"
 
 namespace emdae {
@@ -41,6 +42,9 @@ struct IdaSettings {
   // just-released node's impact root is moved to -gap_tolerance until its
   // gap opens beyond it); 0: 10 atol.
   double gap_tolerance = 0.0;
+  // The sparse LU of the iteration matrix (integrators/klu_solver.hpp).
+  KluSolver::Backend linear_solver = KluSolver::Backend::Auto;
+  long umfpack_from = KluSolver::kUmfpackFrom;
 };
 
 /// A consistent start of the mechanical DAE at (t, q, v):

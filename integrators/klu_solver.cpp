@@ -3,6 +3,7 @@
 #include <klu.h>
 #include <nvector/nvector_serial.h>
 #include <sunmatrix/sunmatrix_sparse.h>
+#include <umfpack.h>
 
 #include <algorithm>
 #include <stdexcept>
@@ -33,6 +34,13 @@ int keep_zero(SUNMatrix) {
 struct KluSolver::Impl {
   SUNLinearSolver shell = nullptr;
   Pivoting pivoting = Pivoting::Kept;
+  Backend backend = Backend::Klu;  // as asked
+  long umfpack_from = kUmfpackFrom;
+  Backend in_use = Backend::Auto;  // as chosen at the last analysis
+  void* umf_symbolic = nullptr;
+  void* umf_numeric = nullptr;
+  double umf_control[UMFPACK_CONTROL];
+  double umf_info[UMFPACK_INFO];
   klu_l_common common{};
   klu_l_symbolic* symbolic = nullptr;
   klu_l_numeric* numeric = nullptr;
@@ -41,11 +49,13 @@ struct KluSolver::Impl {
   long last_flag = SUNLS_SUCCESS;
   Counters counters;
   std::vector<long> outer, inner;  // the pattern analysed last
+  const double* values = nullptr;  // the matrix's values (UMFPACK's solve reads them)
+  std::vector<double> rhs;         // UMFPACK's right-hand side
   SUNMatrix loaded = nullptr;      // the matrix load() filled last
 
   ~Impl() {
     free_numeric();
-    if (symbolic) klu_l_free_symbolic(&symbolic, &common);
+    free_symbolic();
     if (shell) {
       shell->content = nullptr;
       SUNLinSolFreeEmpty(shell);
@@ -54,6 +64,33 @@ struct KluSolver::Impl {
 
   void free_numeric() {
     if (numeric) klu_l_free_numeric(&numeric, &common);
+    if (umf_numeric) umfpack_dl_free_numeric(&umf_numeric);
+  }
+
+  void free_symbolic() {
+    if (symbolic) klu_l_free_symbolic(&symbolic, &common);
+    if (umf_symbolic) umfpack_dl_free_symbolic(&umf_symbolic);
+  }
+
+  bool analysed() const { return symbolic || umf_symbolic; }
+  bool factored() const { return numeric || umf_numeric; }
+
+  // UMFPACK: a fresh factorization on the kept analysis.
+  int umf_factor(long* ap, long* ai, double* ax) {
+    free_numeric();
+    const long status =
+        umfpack_dl_numeric(ap, ai, ax, umf_symbolic, &umf_numeric, umf_control, umf_info);
+    if (status == UMFPACK_WARNING_singular_matrix) {
+      free_numeric();
+      return SUNLS_LUFACT_FAIL;
+    }
+    if (status != UMFPACK_OK) {
+      free_numeric();
+      return SUNLS_PACKAGE_FAIL_UNREC;
+    }
+    ++counters.factorizations;
+    ++counters.umfpack_factorizations;
+    return SUNLS_SUCCESS;
   }
 
   static Impl& of(SUNLinearSolver s) { return *static_cast<Impl*>(s->content); }
@@ -74,15 +111,29 @@ struct KluSolver::Impl {
     long* ap = SUNSparseMatrix_IndexPointers(a);
     long* ai = SUNSparseMatrix_IndexValues(a);
     double* ax = SUNSparseMatrix_Data(a);
-    if (pattern_changed || !symbolic) {
+    values = ax;
+    const long n = SUNSparseMatrix_Columns(a);
+    if (pattern_changed || !analysed()) {
       free_numeric();
-      if (symbolic) klu_l_free_symbolic(&symbolic, &common);
-      symbolic = klu_l_analyze(SUNSparseMatrix_Columns(a), ap, ai, &common);
-      if (!symbolic) return SUNLS_PACKAGE_FAIL_UNREC;
+      free_symbolic();
+      in_use = backend != Backend::Auto ? backend
+               : n >= umfpack_from      ? Backend::Umfpack
+                                        : Backend::Klu;
+      if (in_use == Backend::Umfpack) {
+        if (umfpack_dl_symbolic(n, n, ap, ai, ax, &umf_symbolic, umf_control, umf_info) !=
+            UMFPACK_OK) {
+          free_symbolic();
+          return SUNLS_PACKAGE_FAIL_UNREC;
+        }
+      } else {
+        symbolic = klu_l_analyze(n, ap, ai, &common);
+        if (!symbolic) return SUNLS_PACKAGE_FAIL_UNREC;
+      }
       ++counters.analyses;
       pattern_changed = false;
-      return factor(ap, ai, ax);
+      return in_use == Backend::Umfpack ? umf_factor(ap, ai, ax) : factor(ap, ai, ax);
     }
+    if (in_use == Backend::Umfpack) return umf_factor(ap, ai, ax);
     if (pivoting == Pivoting::EverySetup) return factor(ap, ai, ax);
     if (numeric && klu_l_refactor(ap, ai, ax, symbolic, numeric, &common) &&
         klu_l_rcond(symbolic, numeric, &common) && common.rcond >= kRcondDrop * rcond_fresh) {
@@ -93,7 +144,15 @@ struct KluSolver::Impl {
   }
 
   int solve(N_Vector x, N_Vector b) {
-    if (!numeric) return SUNLS_MEM_NULL;
+    if (!factored()) return SUNLS_MEM_NULL;
+    if (umf_numeric) {
+      // UMFPACK solves out of place; x and b may be the same vector.
+      rhs.assign(N_VGetArrayPointer(b), N_VGetArrayPointer(b) + N_VGetLength(b));
+      const long status =
+          umfpack_dl_solve(UMFPACK_A, outer.data(), inner.data(), values, N_VGetArrayPointer(x),
+                           rhs.data(), umf_numeric, umf_control, umf_info);
+      return status == UMFPACK_OK ? SUNLS_SUCCESS : SUNLS_PACKAGE_FAIL_REC;
+    }
     N_VScale(1.0, b, x);
     const long n = N_VGetLength(x);
     return klu_l_solve(symbolic, numeric, n, 1, N_VGetArrayPointer(x), &common)
@@ -120,10 +179,19 @@ struct KluSolver::Impl {
   }
 };
 
-KluSolver::KluSolver(SUNContext ctx, Ordering ordering, Pivoting pivoting)
+KluSolver::KluSolver(SUNContext ctx, Ordering ordering, Pivoting pivoting, Backend backend,
+                     long umfpack_from)
     : impl_(std::make_unique<Impl>()) {
   Impl& m = *impl_;
   m.pivoting = pivoting;
+  m.backend = backend;
+  m.umfpack_from = umfpack_from;
+  umfpack_dl_defaults(m.umf_control);
+  // The same fill-reducing ordering as KLU's (AMD on A + A^T: our matrices
+  // are structurally symmetric), and no iterative refinement (KLU has none,
+  // and Newton corrects a solve's error anyway).
+  m.umf_control[UMFPACK_ORDERING] = UMFPACK_ORDERING_AMD;
+  m.umf_control[UMFPACK_IRSTEP] = 0;
   if (!klu_l_defaults(&m.common)) throw std::runtime_error("klu_l_defaults failed");
   m.common.ordering = static_cast<int>(ordering);
   // Partial pivoting accepts a diagonal pivot down to this fraction of its
@@ -155,6 +223,10 @@ SUNLinearSolver KluSolver::get() const {
 
 const KluSolver::Counters& KluSolver::counters() const {
   return impl_->counters;
+}
+
+KluSolver::Backend KluSolver::backend_in_use() const {
+  return impl_->in_use;
 }
 
 void KluSolver::load(const SparseMatrix& jac, SUNMatrix a) {

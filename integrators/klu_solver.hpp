@@ -36,6 +36,16 @@
 //  - a singular matrix is a recoverable set-up failure (SUNLS_LUFACT_FAIL):
 //    KINSOL and IDA then report or cut the step.
 // `initialize` keeps everything; nothing else in SUNDIALS needs to change.
+//
+// Large matrices: KLU is a left-looking sparse LU without dense kernels,
+// made for circuit matrices; on FE iteration matrices its factorization
+// grows like n^1.7..2 (docs/performance.md §11). UMFPACK (multifrontal,
+// dense BLAS kernels on its frontal matrices, same AMD ordering) factors a
+// 10^5-dof Q1 block 1.4x and a 2*10^5-dof block 2.0x faster than KLU
+// refactors it; below 5*10^4 KLU's refactorization is the faster.
+// Backend::Auto takes KLU below `umfpack_from` unknowns and UMFPACK from
+// there on; each can be forced. UMFPACK keeps its symbolic analysis while the
+// pattern holds and factors afresh (with its own pivoting) at every set-up.
 #pragma once
 
 #include <sundials/sundials_linearsolver.h>
@@ -51,14 +61,20 @@ class KluSolver {
  public:
   enum class Ordering { Amd = 0, Colamd = 1 };
   enum class Pivoting { Kept, EverySetup };
+  /// Which sparse LU factors the matrix; Auto: by size.
+  enum class Backend { Auto, Klu, Umfpack };
+  /// Auto's threshold (unknowns): measured crossover, docs/performance.md.
+  static constexpr long kUmfpackFrom = 50000;
 
   struct Counters {
-    long analyses = 0;          // symbolic analyses (a new pattern)
-    long factorizations = 0;    // numeric factorizations with pivoting
-    long refactorizations = 0;  // numeric refactorizations on the kept pivot order
+    long analyses = 0;                // symbolic analyses (a new pattern)
+    long factorizations = 0;          // numeric factorizations with pivoting
+    long refactorizations = 0;        // numeric refactorizations on the kept pivot order
+    long umfpack_factorizations = 0;  // of the factorizations, by UMFPACK
   };
 
-  KluSolver(SUNContext ctx, Ordering ordering, Pivoting pivoting);
+  KluSolver(SUNContext ctx, Ordering ordering, Pivoting pivoting, Backend backend = Backend::Klu,
+            long umfpack_from = kUmfpackFrom);
   ~KluSolver();
   KluSolver(const KluSolver&) = delete;
   KluSolver& operator=(const KluSolver&) = delete;
@@ -80,6 +96,8 @@ class KluSolver {
   static void keep_loaded(SUNMatrix a);
 
   const Counters& counters() const;
+  /// The backend the last analysis chose (Klu or Umfpack; Auto before any).
+  Backend backend_in_use() const;
 
  private:
   struct Impl;

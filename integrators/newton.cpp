@@ -25,7 +25,8 @@ constexpr double kRoundOffStep = 1e-15;
 
 KluSolver::Counters sum(const KluSolver::Counters& a, const KluSolver::Counters& b) {
   return {a.analyses + b.analyses, a.factorizations + b.factorizations,
-          a.refactorizations + b.refactorizations};
+          a.refactorizations + b.refactorizations,
+          a.umfpack_factorizations + b.umfpack_factorizations};
 }
 
 }  // namespace
@@ -74,8 +75,8 @@ struct NewtonSolver::Impl {
     // blocks G and G^T), where AMD orders with far less fill than KLU's
     // default COLAMD (measured on the bearing: see docs/performance.md). The
     // solver keeps its analysis across KINSol calls while the pattern holds.
-    klu =
-        std::make_unique<KluSolver>(ctx.get(), KluSolver::Ordering::Amd, KluSolver::Pivoting::Kept);
+    klu = std::make_unique<KluSolver>(ctx.get(), KluSolver::Ordering::Amd,
+                                      KluSolver::Pivoting::Kept, s.linear_solver, s.umfpack_from);
     kin.reset(check_ptr(KINCreate(ctx.get()), "KINCreate"));
     check(KINInit(kin.get(), &Impl::residual_cb, u.get()), "KINInit");
     check(KINSetUserData(kin.get(), this), "KINSetUserData");

@@ -44,6 +44,10 @@ struct NewtonSettings {
   // cost the flat-face blocks 3.5e-8 of their energy); Newton then goes on
   // until the energy residual is met or it stalls at round-off.
   double energy_tolerance = 1e-13;
+  // The sparse LU (integrators/klu_solver.hpp): Auto takes KLU below
+  // umfpack_from unknowns and UMFPACK from there on.
+  KluSolver::Backend linear_solver = KluSolver::Backend::Auto;
+  long umfpack_from = KluSolver::kUmfpackFrom;
 };
 
 struct NewtonResult {

@@ -65,6 +65,8 @@ std::unique_ptr<Stepper> make_stepper(const std::string& name, const System& sys
   if (name == "ida") {
     IdaSettings ida = settings.ida;
     ida.gap_tolerance = settings.contact.gap_tolerance;
+    ida.linear_solver = settings.newton.linear_solver;
+    ida.umfpack_from = settings.newton.umfpack_from;
     return std::make_unique<IdaStepper>(system, ida);
   }
   if (name == "galpha") {

@@ -654,7 +654,25 @@ void bind_settings(py::module_& m) {
       .def(py::init<>())
       .def_readwrite("tolerance", &NewtonSettings::tolerance)
       .def_readwrite("max_iterations", &NewtonSettings::max_iterations)
-      .def_readwrite("line_search", &NewtonSettings::line_search);
+      .def_readwrite("line_search", &NewtonSettings::line_search)
+      .def_property(
+          "linear_solver",
+          [](const NewtonSettings& n) {
+            return std::string(n.linear_solver == KluSolver::Backend::Klu       ? "klu"
+                               : n.linear_solver == KluSolver::Backend::Umfpack ? "umfpack"
+                                                                                : "auto");
+          },
+          [](NewtonSettings& n, const std::string& w) {
+            if (w == "klu")
+              n.linear_solver = KluSolver::Backend::Klu;
+            else if (w == "umfpack")
+              n.linear_solver = KluSolver::Backend::Umfpack;
+            else if (w == "auto")
+              n.linear_solver = KluSolver::Backend::Auto;
+            else
+              throw InputError("schemes.newton.linear_solver: unknown linear solver \"" + w +
+                               "\" (known: \"auto\", \"klu\", \"umfpack\")");
+          });
   py::class_<ContactSettings>(m, "ContactSettings")
       .def(py::init<>())
       .def_property(

@@ -19,6 +19,7 @@
 #include <cstdio>
 #include <map>
 #include <memory>
+#include <numeric>
 #include <random>
 #include <string>
 #include <utility>
@@ -872,6 +873,82 @@ TEST(NewtonSolve, KluAnalysisAndPivotsKeptAcrossSteps) {
   EXPECT_EQ(c.factorizations + c.refactorizations, iterations);
   EXPECT_GE(iterations, 60);  // >= 2 per step: the counts above are not trivial
   EXPECT_LE(std::abs(measure(*s, st.q, st.v, st.t).total() - h0) / h0, 1e-10);
+}
+
+// The two sparse LUs behind the Newton solve (integrators/klu_solver.hpp)
+// give the same run: 30 steps of the spinning ring with KLU and with UMFPACK,
+// forced and chosen by Auto below a threshold lowered to the ring's size.
+// UMFPACK factors afresh at every set-up (no refactorization), KLU once and
+// then refactors; the solves differ by round-off only, so every step takes
+// the same iterations and the states agree to the Newton tolerance (seen:
+// q 1e-12, v 1.1e-10). With Auto at the default threshold the ring stays on KLU.
+TEST(NewtonSolve, UmfpackAndKluGiveTheSameSteps) {
+  const auto model = spinning_ring(MaterialModel::SaintVenantKirchhoff, 64, 5.0);
+  const System* s = &model->system();
+  struct Case {
+    KluSolver::Backend asked;
+    long from;
+    KluSolver::Backend chosen;
+  };
+  const long n = s->n_dofs();
+  std::vector<State> ends;
+  std::vector<std::vector<int>> iterations;
+  for (const Case c :
+       {Case{KluSolver::Backend::Klu, KluSolver::kUmfpackFrom, KluSolver::Backend::Klu},
+        Case{KluSolver::Backend::Umfpack, KluSolver::kUmfpackFrom, KluSolver::Backend::Umfpack},
+        Case{KluSolver::Backend::Auto, n, KluSolver::Backend::Umfpack},
+        Case{KluSolver::Backend::Auto, KluSolver::kUmfpackFrom, KluSolver::Backend::Klu}}) {
+    NewtonSettings ns{1e-10, 25, false};
+    ns.linear_solver = c.asked;
+    ns.umfpack_from = c.from;
+    EnergyMomentumStepper em(*s, ns);
+    State st = initial_state(*s);
+    const double h0 = measure(*s, st.q, st.v, st.t).total();
+    iterations.emplace_back();
+    for (int k = 0; k < 30; ++k) {
+      const StepStats stats = em.step(st, 0.03);
+      ASSERT_TRUE(stats.converged) << stats.message;
+      iterations.back().push_back(stats.iterations);
+    }
+    EXPECT_LE(std::abs(measure(*s, st.q, st.v, st.t).total() - h0) / h0, 1e-10);
+    const KluSolver::Counters k = em.klu_counters();
+    EXPECT_EQ(k.analyses, 1);
+    const long its = std::accumulate(iterations.back().begin(), iterations.back().end(), 0L);
+    if (c.chosen == KluSolver::Backend::Umfpack) {
+      EXPECT_EQ(k.umfpack_factorizations, its);
+      EXPECT_EQ(k.factorizations, its);
+      EXPECT_EQ(k.refactorizations, 0);
+    } else {
+      EXPECT_EQ(k.umfpack_factorizations, 0);
+      EXPECT_EQ(k.factorizations + k.refactorizations, its);
+    }
+    ends.push_back(st);
+  }
+  for (std::size_t i = 1; i < ends.size(); ++i) {
+    EXPECT_EQ(iterations[i], iterations[0]) << "case " << i;
+    // Within the Newton tolerance (1e-10) in q, and 2 tol / dt in v = 2 (q_n+1
+    // - q_n) / dt - v_n: the last Newton correction is not at round-off.
+    EXPECT_LE((ends[i].q - ends[0].q).cwiseAbs().maxCoeff(), 1e-10) << "case " << i;
+    EXPECT_LE((ends[i].v - ends[0].v).cwiseAbs().maxCoeff(), 2e-10 / 0.03) << "case " << i;
+  }
+}
+
+// IDA's iteration matrix through UMFPACK: the same run as through KLU, to
+// IDA's tolerances (its step sizes may differ at round-off level).
+TEST(NewtonSolve, IdaOnUmfpackAsOnKlu) {
+  const auto model = spinning_ring(MaterialModel::SaintVenantKirchhoff, 32, 2.0);
+  std::vector<RunResult> r;
+  for (const auto b : {KluSolver::Backend::Klu, KluSolver::Backend::Umfpack}) {
+    RunSettings settings;
+    settings.scheme = "ida";
+    settings.schemes.newton.linear_solver = b;
+    settings.schemes.ida.rtol = settings.schemes.ida.atol = 1e-8;
+    settings.time = TimeSettings{0.01, 0.5, 0.01};
+    r.push_back(run(*model, settings));
+    ASSERT_TRUE(r.back().finished()) << r.back().summary.status;
+  }
+  EXPECT_LE((r[1].state.q - r[0].state.q).cwiseAbs().maxCoeff(), 1e-6);
+  EXPECT_LE(r[1].summary.energy_rel_error_max, 10 * r[0].summary.energy_rel_error_max + 1e-9);
 }
 
 // Order of accuracy: a coarse ring (16 x 1) spinning at omega = 2 and

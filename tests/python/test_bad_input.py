@@ -107,3 +107,12 @@ def test_an_unknown_vtu_format_is_refused_with_its_key():
         settings.vtu_format = "xml"
     settings.vtu_format = "ascii"
     assert settings.vtu_format == "ascii"
+
+
+def test_an_unknown_linear_solver_is_refused_with_its_key():
+    settings = emdae.NewtonSettings()
+    assert settings.linear_solver == "auto"
+    with pytest.raises(emdae.InputError, match="schemes.newton.linear_solver: unknown linear solver"):
+        settings.linear_solver = "mumps"
+    settings.linear_solver = "umfpack"
+    assert settings.linear_solver == "umfpack"

@@ -1,0 +1,107 @@
+// The Newton solve's sparse LU at scale: KLU against UMFPACK, both through
+// the project's solver (integrators/klu_solver.hpp) as em uses it.
+//
+// The matrix is em's iteration matrix of a square Q1 SVK block, nx x nx
+// elements (2 M / dt^2 + the discrete gradient's Jacobian), from 10^3 to
+// 10^6 unknowns. For each size and backend the table gives the thread CPU
+// time of
+//   first   the first set-up: symbolic analysis + factorization;
+//   next    a later set-up on the same pattern, values changed: KLU
+//           refactors on its kept pivot order, UMFPACK factors afresh;
+//   solve   one solve;
+// and the relative residual |A x - b| / |b| of that solve. This is what
+// Backend::Auto's threshold (KluSolver::kUmfpackFrom) was chosen from.
+//
+//   bench_linear_solvers [nx ...]   (default 16 50 100 160 224 316)
+#include <nvector/nvector_serial.h>
+#include <sundials/sundials_context.h>
+#include <sunmatrix/sunmatrix_sparse.h>
+
+#include <cstdio>
+#include <cstdlib>
+#include <ctime>
+#include <string>
+#include <vector>
+
+#include "core/assembly.hpp"
+#include "core/gradient.hpp"
+#include "core/material.hpp"
+#include "core/mesh.hpp"
+#include "core/system.hpp"
+#include "integrators/klu_solver.hpp"
+
+using namespace emdae;
+
+namespace {
+
+double cpu() {
+  timespec ts{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+  return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
+}
+
+// em's iteration matrix at q (scaled mass + the potential's Jacobian).
+SparseMatrix iteration_matrix(const System& s, const Vec& q, double dt) {
+  Assembler as(s);
+  Triplets trip;
+  Vec g = Vec::Zero(s.n_dofs());
+  as.add_mass(trip, 2.0 / (dt * dt));
+  as.add_potential_forces(GradientKind::Discrete, q, q, 0.0, dt, g, &trip);
+  SparseMatrix j(s.n_dofs(), s.n_dofs());
+  j.setFromTriplets(trip.begin(), trip.end());
+  j.makeCompressed();
+  return j;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  std::vector<int> sizes = {16, 50, 100, 160, 224, 316};
+  if (argc > 1) {
+    sizes.clear();
+    for (int i = 1; i < argc; ++i) sizes.push_back(std::atoi(argv[i]));
+  }
+  SUNContext ctx = nullptr;
+  if (SUNContext_Create(nullptr, &ctx) != 0) return 1;
+  std::printf("%9s %10s  %-8s %9s %9s %9s %10s\n", "dofs", "nnz", "solver", "first_s", "next_s",
+              "solve_s", "residual");
+  for (const int nx : sizes) {
+    System s(2);
+    const Mesh mesh = rectangle_mesh(Eigen::Vector2d::Zero(), nx, nx, nx, nx);
+    add_body(s, mesh, make_material(MaterialModel::SaintVenantKirchhoff, 100.0, 0.3, 1e-3));
+    const double dt = 0.01;
+    const Vec q0 = s.initial_positions();
+    // A deformed state for the second set-up: same pattern, other values.
+    Vec q1 = q0;
+    for (Eigen::Index i = 0; i < q1.size(); ++i) q1[i] *= 1.0 + 1e-3 * std::sin(0.1 * double(i));
+    const SparseMatrix a0 = iteration_matrix(s, q0, dt), a1 = iteration_matrix(s, q1, dt);
+    const long n = a0.cols();
+    for (const auto backend : {KluSolver::Backend::Klu, KluSolver::Backend::Umfpack}) {
+      KluSolver lu(ctx, KluSolver::Ordering::Amd, KluSolver::Pivoting::Kept, backend);
+      SUNMatrix m = SUNSparseMatrix(n, n, a0.nonZeros(), CSC_MAT, ctx);
+      N_Vector b = N_VNew_Serial(n, ctx), x = N_VNew_Serial(n, ctx);
+      N_VConst(1.0, b);
+      lu.load(a0, m);
+      double t0 = cpu();
+      int flag = SUNLinSolSetup(lu.get(), m);
+      const double first = cpu() - t0;
+      lu.load(a1, m);
+      t0 = cpu();
+      flag |= SUNLinSolSetup(lu.get(), m);
+      const double next = cpu() - t0;
+      t0 = cpu();
+      flag |= SUNLinSolSolve(lu.get(), m, x, b, 0.0);
+      const double solve = cpu() - t0;
+      const Eigen::Map<const Vec> xv(N_VGetArrayPointer(x), n);
+      const double residual = (a1 * xv - Vec::Ones(n)).norm() / std::sqrt(double(n));
+      std::printf("%9ld %10ld  %-8s %9.4f %9.4f %9.4f %10.2e%s\n", n, long(a0.nonZeros()),
+                  backend == KluSolver::Backend::Klu ? "klu" : "umfpack", first, next, solve,
+                  residual, flag ? "  (a set-up or solve failed)" : "");
+      std::fflush(stdout);
+      N_VDestroy(b);
+      N_VDestroy(x);
+      SUNMatDestroy(m);
+    }
+  }
+  SUNContext_Free(&ctx);
+}
