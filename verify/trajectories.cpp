@@ -10,39 +10,13 @@
 #include <stdexcept>
 
 #include "verify/atomic_file.hpp"
+#include "verify/vtu_encoding.hpp"
 
 namespace emdae {
 
 namespace {
 
 namespace fs = std::filesystem;
-
-// Full precision, and NaN/inf spelt as VTK's readers (and numpy) accept.
-void put(std::string& out, double x) {
-  if (std::isnan(x))
-    out += "nan";
-  else if (std::isinf(x))
-    out += x > 0 ? "inf" : "-inf";
-  else
-    out += fmt::format("{:.17g}", x);
-}
-
-std::string xml_escape(const std::string& s) {
-  std::string out;
-  for (char c : s) {
-    if (c == '&')
-      out += "&amp;";
-    else if (c == '<')
-      out += "&lt;";
-    else if (c == '>')
-      out += "&gt;";
-    else if (c == '"')
-      out += "&quot;";
-    else
-      out += c;
-  }
-  return out;
-}
 
 std::string csv_path(const std::string& dir) {
   return (fs::path(dir) / "trajectories.csv").string();
@@ -130,7 +104,7 @@ void TrajectoryWriter::write_points(const State& state, long step) {
        "<VTKFile type=\"PolyData\" version=\"0.1\" byte_order=\"LittleEndian\">\n"
        "<PolyData>\n<FieldData>\n"
        "<DataArray type=\"Float64\" Name=\"TimeValue\" NumberOfTuples=\"1\" format=\"ascii\">";
-  put(x, state.t);
+  vtu::append_number(x, state.t);
   x += "</DataArray>\n</FieldData>\n";
   x += fmt::format(
       "<Piece NumberOfPoints=\"{}\" NumberOfVerts=\"{}\" NumberOfLines=\"0\" "
@@ -144,7 +118,7 @@ void TrajectoryWriter::write_points(const State& state, long step) {
     for (const TrackedPoint& p : points_) {
       for (int d = 0; d < 3; ++d) {
         if (d) x += ' ';
-        put(x, d < dim_ ? values[p.node * dim_ + d] : 0.0);
+        vtu::append_number(x, d < dim_ ? values[p.node * dim_ + d] : 0.0);
       }
       x += '\n';
     }
@@ -183,18 +157,7 @@ void TrajectoryWriter::close() {
 }
 
 void TrajectoryWriter::write_pvd() const {
-  std::string x =
-      "<?xml version=\"1.0\"?>\n"
-      "<VTKFile type=\"Collection\" version=\"0.1\" byte_order=\"LittleEndian\">\n"
-      "<Collection>\n";
-  for (const auto& [t, file] : index_) {
-    std::string time;
-    put(time, t);
-    x += fmt::format("<DataSet timestep=\"{}\" group=\"\" part=\"0\" file=\"{}\"/>\n", time,
-                     xml_escape(file));
-  }
-  x += "</Collection>\n</VTKFile>\n";
-  write_atomically((fs::path(dir_) / "trajectories.pvd").string(), x, "PVD index");
+  vtu::write_pvd((fs::path(dir_) / "trajectories.pvd").string(), index_);
 }
 
 }  // namespace emdae

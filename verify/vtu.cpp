@@ -27,31 +27,8 @@ constexpr std::uint8_t kVtkQuad = 9;
 // Binary arrays are the machine's bytes, declared little-endian in the file.
 static_assert(__BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__, "VTU binary output assumes little-endian");
 
-std::string xml_escape(const std::string& s) {
-  std::string out;
-  for (char c : s) {
-    if (c == '&')
-      out += "&amp;";
-    else if (c == '<')
-      out += "&lt;";
-    else if (c == '>')
-      out += "&gt;";
-    else if (c == '"')
-      out += "&quot;";
-    else
-      out += c;
-  }
-  return out;
-}
-
-// Full precision, and NaN/inf spelt as VTK's readers (and numpy) accept.
 void put(std::string& out, double x) {
-  if (std::isnan(x))
-    out += "nan";
-  else if (std::isinf(x))
-    out += x > 0 ? "inf" : "-inf";
-  else
-    out += fmt::format("{:.17g}", x);
+  vtu::append_number(out, x);
 }
 
 template <class Int, class = std::enable_if_t<std::is_integral_v<Int>>>
@@ -162,7 +139,7 @@ void FieldWriter::write(const State& state, long step) {
     x += fmt::format(
         "<DataArray type=\"Int32\" Name=\"body:{}\" NumberOfTuples=\"1\" format=\"ascii\">{}"
         "</DataArray>\n",
-        xml_escape(bodies_[bi].name), bi);
+        vtu::xml_escape(bodies_[bi].name), bi);
   x += "</FieldData>\n";
   x += fmt::format("<Piece NumberOfPoints=\"{}\" NumberOfCells=\"{}\">\n", n_points, n_cells);
 
@@ -172,7 +149,7 @@ void FieldWriter::write(const State& state, long step) {
   const auto array = [&](const char* type, const std::string& name, int components,
                          const auto& values, const char* extra = "", int per_line = 0) {
     const auto line = static_cast<std::size_t>(per_line > 0 ? per_line : components);
-    x += fmt::format("<DataArray type=\"{}\" Name=\"{}\"", type, xml_escape(name));
+    x += fmt::format("<DataArray type=\"{}\" Name=\"{}\"", type, vtu::xml_escape(name));
     if (components > 1) x += fmt::format(" NumberOfComponents=\"{}\"", components);
     x += extra;
     x += ascii ? " format=\"ascii\">\n" : " format=\"binary\">\n";
@@ -319,18 +296,7 @@ void FieldWriter::close() {
 }
 
 void FieldWriter::write_pvd() const {
-  std::string x =
-      "<?xml version=\"1.0\"?>\n"
-      "<VTKFile type=\"Collection\" version=\"0.1\" byte_order=\"LittleEndian\">\n"
-      "<Collection>\n";
-  for (const auto& e : entries_) {
-    std::string t;
-    put(t, e.t);
-    x += fmt::format("<DataSet timestep=\"{}\" group=\"\" part=\"0\" file=\"{}\"/>\n", t,
-                     xml_escape(e.file));
-  }
-  x += "</Collection>\n</VTKFile>\n";
-  write_atomically(pvd_path_, x, "PVD index");
+  vtu::write_pvd(pvd_path_, index());
 }
 
 }  // namespace emdae

@@ -1,13 +1,17 @@
 #include "verify/vtu_encoding.hpp"
 
+#include <fmt/format.h>
 #include <zlib.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <cstring>
 #include <stdexcept>
 #include <string>
 #include <vector>
+
+#include "verify/atomic_file.hpp"
 
 namespace emdae::vtu {
 
@@ -70,6 +74,48 @@ void append_zlib_blocks(std::string& out, const void* data, std::size_t n, int l
   }
   append_base64(out, header.data(), header.size());
   append_base64(out, blocks.data(), blocks.size());
+}
+
+void append_number(std::string& out, double x) {
+  if (std::isnan(x))
+    out += "nan";
+  else if (std::isinf(x))
+    out += x > 0 ? "inf" : "-inf";
+  else
+    out += fmt::format("{:.17g}", x);
+}
+
+std::string xml_escape(const std::string& s) {
+  std::string out;
+  for (char c : s) {
+    if (c == '&')
+      out += "&amp;";
+    else if (c == '<')
+      out += "&lt;";
+    else if (c == '>')
+      out += "&gt;";
+    else if (c == '"')
+      out += "&quot;";
+    else
+      out += c;
+  }
+  return out;
+}
+
+void write_pvd(const std::string& path,
+               const std::vector<std::pair<double, std::string>>& entries) {
+  std::string x =
+      "<?xml version=\"1.0\"?>\n"
+      "<VTKFile type=\"Collection\" version=\"0.1\" byte_order=\"LittleEndian\">\n"
+      "<Collection>\n";
+  for (const auto& [t, file] : entries) {
+    std::string time;
+    append_number(time, t);
+    x += fmt::format("<DataSet timestep=\"{}\" group=\"\" part=\"0\" file=\"{}\"/>\n", time,
+                     xml_escape(file));
+  }
+  x += "</Collection>\n</VTKFile>\n";
+  write_atomically(path, x, "PVD index");
 }
 
 }  // namespace emdae::vtu

@@ -15,6 +15,8 @@
 
 #include <cstddef>
 #include <string>
+#include <utility>
+#include <vector>
 
 namespace emdae::vtu {
 
@@ -29,5 +31,16 @@ void append_base64(std::string& out, const void* data, std::size_t n);
 /// `level` is zlib's compression level (1 fastest .. 9 smallest). Throws
 /// std::runtime_error when zlib fails.
 void append_zlib_blocks(std::string& out, const void* data, std::size_t n, int level);
+
+/// Appends `x` in full precision (17 significant digits), NaN and infinity
+/// spelt as VTK's readers and numpy accept them ("nan", "inf", "-inf").
+void append_number(std::string& out, double x);
+
+/// `s` with &, <, > and " escaped for an XML attribute or text.
+std::string xml_escape(const std::string& s);
+
+/// Writes (atomically) the ParaView collection at `path` that lists
+/// `entries`, each a time and a file name relative to it.
+void write_pvd(const std::string& path, const std::vector<std::pair<double, std::string>>& entries);
 
 }  // namespace emdae::vtu
