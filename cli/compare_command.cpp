@@ -148,20 +148,8 @@ int command_compare(const CompareOptions& options, std::ostream& out, std::ostre
   if (!problem.empty()) return refuse(problem);
   const std::string dir =
       options.out_dir.empty() ? "out/" + scene->settings.name + "-compare" : options.out_dir;
-  const bool made_here = root && !fs::exists(dir);
-  if (root) {  // the other ranks of an MPI job write nothing
-    try {
-      create_output_folder(dir);
-    } catch (const OutputError& e) {
-      return refuse(e.what());
-    }
-  }
-  if (const int code = agreed(kExitOk); code != kExitOk) {
-    // Another rank refused: nothing written, the folder made for it neither.
-    std::error_code ec;
-    if (made_here) fs::remove(dir, ec);
+  if (const int code = make_shared_output_folder(dir, root, refuse, agreed); code != kExitOk)
     return code;
-  }
 
   // Each scheme into its own folder with its own report, one after the
   // other or --jobs at a time, and under MPI shared among the ranks (those

@@ -239,6 +239,26 @@ int worse(int current, int code) {
   return code == kExitBadInput ? kExitRunFailed : code;
 }
 
+int make_shared_output_folder(const std::string& dir, bool root,
+                              const std::function<int(const std::string&)>& refuse,
+                              const std::function<int(int)>& agreed) {
+  const bool made_here = root && !std::filesystem::exists(dir);
+  if (root) {  // the other ranks of an MPI job write nothing
+    try {
+      create_output_folder(dir);
+    } catch (const OutputError& e) {
+      return refuse(e.what());
+    }
+  }
+  if (const int code = agreed(kExitOk); code != kExitOk) {
+    // Another rank refused: nothing written, the folder made for it neither.
+    std::error_code ec;
+    if (made_here) std::filesystem::remove(dir, ec);
+    return code;
+  }
+  return kExitOk;
+}
+
 std::string static_scene_refused(const Scene& scene, const char* command) {
   return fmt::format(
       "{}:1:1: key 'time': missing: the scene is a static analysis ([statics] without [time]), "

@@ -393,20 +393,8 @@ int command_study(const StudyOptions& options, std::ostream& out, std::ostream& 
 
   const std::string dir =
       options.out_dir.empty() ? "out/" + scene->settings.name + "-study" : options.out_dir;
-  const bool made_here = root && !fs::exists(dir);
-  if (root) {  // the other ranks of an MPI job write nothing
-    try {
-      create_output_folder(dir);
-    } catch (const OutputError& e) {
-      return refuse(e.what());
-    }
-  }
-  if (const int code = agreed(kExitOk); code != kExitOk) {
-    // Another rank refused: nothing written, the folder made for it neither.
-    std::error_code ec;
-    if (made_here) fs::remove(dir, ec);
+  if (const int code = make_shared_output_folder(dir, root, refuse, agreed); code != kExitOk)
     return code;
-  }
 
   Study study;
   study.scene = scene->settings.name;
