@@ -82,8 +82,15 @@ struct NewtonSolver::Impl {
     check(KINSetUserData(kin.get(), this), "KINSetUserData");
     check(KINSetLinearSolver(kin.get(), klu->get(), jmat.get()), "KINSetLinearSolver");
     check(KINSetJacFn(kin.get(), &Impl::jacobian_cb), "KINSetJacFn");
-    // Exact Newton: a fresh Jacobian at every iteration.
-    check(KINSetMaxSetupCalls(kin.get(), 1), "KINSetMaxSetupCalls");
+    // Newton (jacobian_reuse 1): a fresh Jacobian at every iteration.
+    // Modified Newton: one serves up to jacobian_reuse iterations while each
+    // iteration cuts the residual by reuse_contraction.
+    check(KINSetMaxSetupCalls(kin.get(), std::max(1, s.jacobian_reuse)), "KINSetMaxSetupCalls");
+    if (s.jacobian_reuse > 1) {
+      check(KINSetNoResMon(kin.get(), SUNFALSE), "KINSetNoResMon");
+      check(KINSetMaxSubSetupCalls(kin.get(), 1), "KINSetMaxSubSetupCalls");
+      check(KINSetResMonConstValue(kin.get(), s.reuse_contraction), "KINSetResMonConstValue");
+    }
     check(KINSetNumMaxIters(kin.get(), s.max_iterations), "KINSetNumMaxIters");
     // A step stalled at round-off ends the iteration; the result is then
     // accepted if its residual meets `tolerance` (a tolerance below the

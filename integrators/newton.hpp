@@ -48,6 +48,13 @@ struct NewtonSettings {
   // umfpack_from unknowns and UMFPACK from there on.
   KluSolver::Backend linear_solver = KluSolver::Backend::Auto;
   long umfpack_from = KluSolver::kUmfpackFrom;
+  // Modified Newton: a Jacobian (and its factorization) serves up to this
+  // many iterations of a solve; 1 is Newton's method. A reused Jacobian is
+  // dropped as soon as an iteration reduces the residual by less than
+  // `reuse_contraction` (KINSOL's residual monitoring, checked every
+  // iteration), and every solve starts with a fresh one.
+  int jacobian_reuse = 1;
+  double reuse_contraction = 0.1;
 };
 
 struct NewtonResult {

@@ -655,6 +655,7 @@ void bind_settings(py::module_& m) {
       .def_readwrite("tolerance", &NewtonSettings::tolerance)
       .def_readwrite("max_iterations", &NewtonSettings::max_iterations)
       .def_readwrite("line_search", &NewtonSettings::line_search)
+      .def_readwrite("jacobian_reuse", &NewtonSettings::jacobian_reuse)
       .def_property(
           "linear_solver",
           [](const NewtonSettings& n) {

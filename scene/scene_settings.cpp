@@ -99,8 +99,8 @@ void Builder::parse_scheme(const Fields& f) {
   // The flat rtol, atol, max_order and rho_inf are the keys of the tables
   // [scheme.ida] and [scheme.galpha] as they were first written: still read.
   f.only({"name", "newton_tolerance", "newton_max_iterations", "line_search", "linear_solver",
-          "impact", "locate_impacts", "gap_tolerance", "ida", "galpha", "rtol", "atol", "max_order",
-          "rho_inf"});
+          "jacobian_reuse", "impact", "locate_impacts", "gap_tolerance", "ida", "galpha", "rtol",
+          "atol", "max_order", "rho_inf"});
   if (const auto name = f.optional_string("name")) {
     const auto known = known_schemes();
     if (std::find(known.begin(), known.end(), *name) == known.end()) {
@@ -156,6 +156,7 @@ void Builder::parse_scheme(const Fields& f) {
   ss.newton.tolerance = f.optional_positive("newton_tolerance").value_or(1e-10);
   ss.newton.max_iterations = static_cast<int>(f.integer_in("newton_max_iterations", 20, 1, 1000));
   ss.newton.line_search = f.boolean("line_search", false);
+  ss.newton.jacobian_reuse = static_cast<int>(f.integer_in("jacobian_reuse", 1, 1, 100));
   if (const auto solver = f.optional_string("linear_solver")) {
     const std::vector<std::string> known = {"auto", "klu", "umfpack"};
     if (std::find(known.begin(), known.end(), *solver) == known.end())

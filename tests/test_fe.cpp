@@ -933,6 +933,40 @@ TEST(NewtonSolve, UmfpackAndKluGiveTheSameSteps) {
   }
 }
 
+// Modified Newton (NewtonSettings::jacobian_reuse): on the spinning ring a
+// Jacobian serves several iterations, so there are fewer set-ups than
+// iterations (with Newton's method: as many), the energy is still conserved
+// to the energy tolerance's order, and the states agree with Newton's
+// within the Newton tolerance.
+TEST(NewtonSolve, ReusedJacobiansKeepTheFigures) {
+  const auto model = spinning_ring(MaterialModel::SaintVenantKirchhoff, 64, 5.0);
+  const System* s = &model->system();
+  std::vector<State> ends;
+  std::vector<long> its, setups;
+  for (const int reuse : {1, 4}) {
+    NewtonSettings ns{1e-10, 25, false};
+    ns.jacobian_reuse = reuse;
+    EnergyMomentumStepper em(*s, ns);
+    State st = initial_state(*s);
+    const double h0 = measure(*s, st.q, st.v, st.t).total();
+    long n = 0;
+    for (int k = 0; k < 30; ++k) {
+      const StepStats stats = em.step(st, 0.03);
+      ASSERT_TRUE(stats.converged) << stats.message;
+      n += stats.iterations;
+    }
+    EXPECT_LE(std::abs(measure(*s, st.q, st.v, st.t).total() - h0) / h0, 1e-10) << reuse;
+    const KluSolver::Counters c = em.klu_counters();
+    its.push_back(n);
+    setups.push_back(c.factorizations + c.refactorizations);
+    ends.push_back(st);
+  }
+  EXPECT_EQ(setups[0], its[0]);
+  EXPECT_LT(setups[1], its[1]);
+  EXPECT_LT(setups[1], setups[0]);
+  EXPECT_LE((ends[1].q - ends[0].q).cwiseAbs().maxCoeff(), 1e-10);
+}
+
 // IDA's iteration matrix through UMFPACK: the same run as through KLU, to
 // IDA's tolerances (its step sizes may differ at round-off level).
 TEST(NewtonSolve, IdaOnUmfpackAsOnKlu) {
