@@ -20,6 +20,7 @@
 #include "verify/atomic_file.hpp"
 #include "verify/binary_io.hpp"
 #include "verify/report.hpp"
+#include "verify/scratch_folder.hpp"
 
 namespace emdae {
 
@@ -101,28 +102,6 @@ std::vector<std::pair<std::string, std::string>> folder_files(const fs::path& di
   return out;
 }
 
-// A private folder for the runs of a rank other than 0, removed with them.
-class ScratchFolder {
- public:
-  ScratchFolder() {
-    std::string pattern = (fs::temp_directory_path() / "emdae-compare-XXXXXX").string();
-    if (!::mkdtemp(pattern.data()))
-      throw std::runtime_error("cannot create a scratch folder: " +
-                               std::string(std::strerror(errno)));
-    path_ = pattern;
-  }
-  ~ScratchFolder() {
-    std::error_code ec;
-    fs::remove_all(path_, ec);
-  }
-  ScratchFolder(const ScratchFolder&) = delete;
-  ScratchFolder& operator=(const ScratchFolder&) = delete;
-  const fs::path& path() const { return path_; }
-
- private:
-  fs::path path_;
-};
-
 }  // namespace
 
 int command_compare(const CompareOptions& options, std::ostream& out, std::ostream& console_err) {
@@ -168,7 +147,7 @@ int command_compare(const CompareOptions& options, std::ostream& out, std::ostre
   if (n_ranks > 1)
     cases = share_cases(std::vector<double>(schemes.size(), 1.0), n_ranks, cluster::rank());
   std::unique_ptr<ScratchFolder> scratch;
-  if (!root) scratch = std::make_unique<ScratchFolder>();
+  if (!root) scratch = std::make_unique<ScratchFolder>("compare", "");
   CaseWork work;
   work.err = &err;
   work.hold_text = !root;

@@ -130,13 +130,18 @@ void Model::add_link(const std::string& a, const std::string& b, double length) 
   system_->add_constraint(make_link(*system_, p.node, q.node, l));
 }
 
-void Model::add_anchor(const std::string& particle, const Vec& point, double length) {
+const Particle& Model::anchorable(const std::string& particle) const {
   const Particle& p = checked_particle(particle, "particle");
   if (p.fixed) throw ModelError("particle", "an anchor on a fixed particle constrains nothing");
   if (anchored_.count(p.node))
     throw ModelError("particle", "'" + particle +
                                      "' is anchored already (a second rigid link would be "
                                      "redundant)");
+  return p;
+}
+
+void Model::add_anchor(const std::string& particle, const Vec& point, double length) {
+  const Particle& p = anchorable(particle);
   const double l =
       rigid_length(length, (p.position - point).norm(), "'" + particle + "' and its anchor point");
   anchored_.insert(p.node);
@@ -144,12 +149,7 @@ void Model::add_anchor(const std::string& particle, const Vec& point, double len
 }
 
 void Model::add_moving_anchor(const std::string& particle, const AnchorPath& path, double length) {
-  const Particle& p = checked_particle(particle, "particle");
-  if (p.fixed) throw ModelError("particle", "an anchor on a fixed particle constrains nothing");
-  if (anchored_.count(p.node))
-    throw ModelError("particle", "'" + particle +
-                                     "' is anchored already (a second rigid link would be "
-                                     "redundant)");
+  const Particle& p = anchorable(particle);
   const double l = rigid_length(length, (p.position - path.position(0.0)).norm(),
                                 "'" + particle + "' and its anchor point at t = 0");
   anchored_.insert(p.node);

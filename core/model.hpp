@@ -207,6 +207,9 @@ class Model {
 
  private:
   const Particle& checked_particle(const std::string& name, const std::string& key) const;
+  // The particle an anchor may hold: known, not fixed, not anchored yet
+  // (ModelError with key "particle" otherwise).
+  const Particle& anchorable(const std::string& particle) const;
   void prescribe(const std::string& nodes, Components components, bool fixed, const Vec& u,
                  const TimeFunction& g);
 

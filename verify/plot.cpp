@@ -17,6 +17,7 @@
 #include <stdexcept>
 
 #include "verify/page.hpp"
+#include "verify/scratch_folder.hpp"
 
 extern char** environ;
 
@@ -78,29 +79,6 @@ std::string read_text(const fs::path& path) {
   s << in.rdbuf();
   return s.str();
 }
-
-// A private scratch folder for gnuplot's inputs and outputs, removed with
-// everything in it, so that nothing but the report lands in the run folder.
-class ScratchFolder {
- public:
-  ScratchFolder() {
-    std::string pattern = (fs::temp_directory_path() / "emdae-plot-XXXXXX").string();
-    if (!::mkdtemp(pattern.data()))
-      throw std::runtime_error(std::string("cannot create a scratch folder for gnuplot: ") +
-                               std::strerror(errno));
-    path_ = pattern;
-  }
-  ~ScratchFolder() {
-    std::error_code ec;
-    fs::remove_all(path_, ec);
-  }
-  ScratchFolder(const ScratchFolder&) = delete;
-  ScratchFolder& operator=(const ScratchFolder&) = delete;
-  fs::path operator/(const std::string& name) const { return path_ / name; }
-
- private:
-  fs::path path_;
-};
 
 std::string gnuplot_program() {
   const char* env = std::getenv("EMDAE_GNUPLOT");
@@ -408,7 +386,7 @@ std::string figures_html(const std::vector<Figure>& figures, const GnuplotStatus
   std::string scratch_error;
   if (gnuplot.available) {
     try {
-      scratch.emplace();
+      scratch.emplace("plot", " for gnuplot");
     } catch (const std::exception& e) {
       scratch_error = e.what();
     }
@@ -447,7 +425,7 @@ using namespace report_detail;
 GnuplotStatus probe_gnuplot() {
   GnuplotStatus status;
   try {
-    ScratchFolder scratch;
+    ScratchFolder scratch("plot", " for gnuplot");
     std::string why;
     const fs::path log = scratch / "version.log";
     const int rc = run_program({gnuplot_program(), "--version"}, log, why);
