@@ -61,13 +61,16 @@ std::vector<std::string> parse_schemes(const std::string& text, std::string& pro
 std::vector<std::string> split_list(const std::string& text);
 
 /// The output folder of `compare` and `study` under an MPI job: rank 0
-/// (`root`) makes `dir` (create_output_folder; a refusal goes to `refuse`),
-/// then every rank agrees on the outcome through `agreed`. Returns kExitOk,
-/// or the code of the rank that refused; the folder made here for a job
-/// another rank refused is removed again.
+/// (`root`) makes `dir` and locks it for as long as `held` lives (an
+/// OutputFolder that keeps what is there; a refusal, such as a folder
+/// another emdae holds, goes to `refuse`), then every rank agrees on the
+/// outcome through `agreed`. Returns kExitOk, or the code of the rank that
+/// refused; the folder made here for a job another rank refused is removed
+/// again.
 int make_shared_output_folder(const std::string& dir, bool root,
                               const std::function<int(const std::string&)>& refuse,
-                              const std::function<int(int)>& agreed);
+                              const std::function<int(int)>& agreed,
+                              std::unique_ptr<OutputFolder>& held);
 
 /// Why `compare` and `study` refuse a static analysis.
 std::string static_scene_refused(const Scene& scene, const char* command);

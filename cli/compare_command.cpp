@@ -127,7 +127,9 @@ int command_compare(const CompareOptions& options, std::ostream& out, std::ostre
   if (!problem.empty()) return refuse(problem);
   const std::string dir =
       options.out_dir.empty() ? "out/" + scene->settings.name + "-compare" : options.out_dir;
-  if (const int code = make_shared_output_folder(dir, root, refuse, agreed); code != kExitOk)
+  std::unique_ptr<OutputFolder> locked;  // the folder, held until the command ends
+  if (const int code = make_shared_output_folder(dir, root, refuse, agreed, locked);
+      code != kExitOk)
     return code;
 
   // Each scheme into its own folder with its own report, one after the

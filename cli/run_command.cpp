@@ -241,19 +241,27 @@ int worse(int current, int code) {
 
 int make_shared_output_folder(const std::string& dir, bool root,
                               const std::function<int(const std::string&)>& refuse,
-                              const std::function<int(int)>& agreed) {
+                              const std::function<int(int)>& agreed,
+                              std::unique_ptr<OutputFolder>& held) {
   const bool made_here = root && !std::filesystem::exists(dir);
   if (root) {  // the other ranks of an MPI job write nothing
     try {
-      create_output_folder(dir);
+      // Locked for the whole command (another study or compare into the same
+      // folder is refused); what is there stays: the runs' own folders
+      // clear their earlier output themselves.
+      held = std::make_unique<OutputFolder>(dir, /*force=*/true, /*clean=*/false);
     } catch (const OutputError& e) {
       return refuse(e.what());
     }
   }
   if (const int code = agreed(kExitOk); code != kExitOk) {
     // Another rank refused: nothing written, the folder made for it neither.
+    held.reset();
     std::error_code ec;
-    if (made_here) std::filesystem::remove(dir, ec);
+    if (made_here) {
+      std::filesystem::remove(std::filesystem::path(dir) / ".emdae.lock", ec);
+      std::filesystem::remove(dir, ec);
+    }
     return code;
   }
   return kExitOk;

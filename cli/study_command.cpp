@@ -393,7 +393,9 @@ int command_study(const StudyOptions& options, std::ostream& out, std::ostream& 
 
   const std::string dir =
       options.out_dir.empty() ? "out/" + scene->settings.name + "-study" : options.out_dir;
-  if (const int code = make_shared_output_folder(dir, root, refuse, agreed); code != kExitOk)
+  std::unique_ptr<OutputFolder> locked;  // the folder, held until the command ends
+  if (const int code = make_shared_output_folder(dir, root, refuse, agreed, locked);
+      code != kExitOk)
     return code;
 
   Study study;

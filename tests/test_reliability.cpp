@@ -377,6 +377,30 @@ TEST(OutputFolder, AnotherRunHoldingTheFolderIsRefused) {
   EXPECT_FALSE(fs::exists(dir / "o/history.csv"));
 }
 
+// The folder of a study or a comparison is held for the whole command: one
+// that another emdae holds is refused before anything runs, and nothing is
+// written into it. Once the first is gone the same command runs there.
+TEST(OutputFolder, AStudyOrComparisonHoldsItsWholeFolder) {
+  for (const std::string command : {"study --schemes em --dts 0.02,0.01 --t-end 0.1",
+                                    "compare --schemes em,midpoint --t-end 0.1"}) {
+    TempDir dir;
+    fs::create_directories(dir / "o");
+    const int fd = ::open((dir / "o/.emdae.lock").c_str(), O_RDWR | O_CREAT, 0644);
+    ASSERT_GE(fd, 0);
+    ASSERT_EQ(::flock(fd, LOCK_EX | LOCK_NB), 0);
+    const std::string args = command + " " + quote(example("four_particle")) + " -q --out o";
+    const Result held = emdae(args, dir.path());
+    EXPECT_EQ(held.code, 2) << command << ": " << held.output;
+    EXPECT_TRUE(has(held.output, "in use by another emdae run")) << held.output;
+    std::vector<std::string> names;
+    for (const auto& e : fs::directory_iterator(dir / "o")) names.push_back(e.path().filename());
+    EXPECT_EQ(names, std::vector<std::string>{".emdae.lock"}) << command;
+    ::close(fd);
+    const Result free = emdae(args, dir.path());
+    EXPECT_EQ(free.code, 0) << command << ": " << free.output;
+  }
+}
+
 TEST(OutputFolder, ASecondRunReplacesTheFirstRunsOutputWhole) {
   TempDir dir;
   Result r = emdae("run " + quote(example("patch_test")) + " -q --out o", dir.path());
