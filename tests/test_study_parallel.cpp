@@ -191,12 +191,14 @@ TEST(StudyMpi, TwoRanksGiveTheFiguresOfOneAfterTheOther) {
   ASSERT_NE(table, std::string::npos) << ranks.output;
   EXPECT_EQ(ranks.output.find("  output: ", table + 1), std::string::npos) << ranks.output;
   expect_same_study(dir.path() / "one", dir.path() / "ranks");
-  // Rank 0 alone wrote the folder: the three files, nothing half-written.
+  // Rank 0 alone wrote the folder: the three files and the lock it held,
+  // nothing half-written.
   std::vector<std::string> files;
   for (const auto& e : fs::directory_iterator(dir.path() / "ranks"))
     files.push_back(e.path().filename().string());
   std::sort(files.begin(), files.end());
-  EXPECT_EQ(files, (std::vector<std::string>{"study.csv", "study.html", "study.json"}));
+  EXPECT_EQ(files,
+            (std::vector<std::string>{".emdae.lock", "study.csv", "study.html", "study.json"}));
   // And with two threads on each rank.
   const Result both = mpirun(study_args(dir.path() / "both") + " --jobs 2", dir.path());
   ASSERT_EQ(both.code, 0) << both.output;
