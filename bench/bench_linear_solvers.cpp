@@ -9,13 +9,20 @@
 //   next    a later set-up on the same pattern, values changed: KLU
 //           refactors on its kept pivot order, UMFPACK factors afresh;
 //   solve   one solve;
-// and the relative residual |A x - b| / |b| of that solve. This is what
-// Backend::Auto's threshold (KluSolver::kUmfpackFrom) was chosen from.
+// and the relative residual |A x - b| / |b| of that solve, with KLU's own
+// estimate, from its symbolic analysis alone, of the factor's entries per
+// unknown ((lnz + unz) / n) and flops per unknown. This is what
+// Backend::Auto's rule (KluSolver::kUmfpackFrom, kUmfpackFill) was chosen
+// from.
 //
-//   bench_linear_solvers [nx ...]   (default 16 50 100 160 224 316)
+//   bench_linear_solvers [MESH ...]   (default 16 50 100 160 224 316)
+//   MESH: nx (an nx x nx square block) or ring:AROUND:THROUGH (a ring of
+//   radii 9 and 10, thin and long: little fill whatever its size)
 #include <nvector/nvector_serial.h>
 #include <sundials/sundials_context.h>
 #include <sunmatrix/sunmatrix_sparse.h>
+
+#include <klu.h>
 
 #include <cstdio>
 #include <cstdlib>
@@ -56,26 +63,40 @@ SparseMatrix iteration_matrix(const System& s, const Vec& q, double dt) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  std::vector<int> sizes = {16, 50, 100, 160, 224, 316};
-  if (argc > 1) {
-    sizes.clear();
-    for (int i = 1; i < argc; ++i) sizes.push_back(std::atoi(argv[i]));
-  }
+  std::vector<std::string> meshes = {"16", "50", "100", "160", "224", "316"};
+  if (argc > 1) meshes.assign(argv + 1, argv + argc);
   SUNContext ctx = nullptr;
   if (SUNContext_Create(nullptr, &ctx) != 0) return 1;
-  std::printf("%9s %10s  %-8s %9s %9s %9s %10s\n", "dofs", "nnz", "solver", "first_s", "next_s",
-              "solve_s", "residual");
-  for (const int nx : sizes) {
+  std::printf("%-14s %9s %10s %9s %11s  %-8s %9s %9s %9s %10s\n", "mesh", "dofs", "nnz",
+              "fill/dof", "flops/dof", "solver", "first_s", "next_s", "solve_s", "residual");
+  for (const std::string& spec : meshes) {
     System s(2);
-    const Mesh mesh = rectangle_mesh(Eigen::Vector2d::Zero(), nx, nx, nx, nx);
+    int around = 0, through = 0;
+    const bool ring = std::sscanf(spec.c_str(), "ring:%d:%d", &around, &through) == 2;
+    const int nx = ring ? 0 : std::atoi(spec.c_str());
+    const Mesh mesh = ring ? ring_mesh(Eigen::Vector2d::Zero(), 9.0, 10.0, around, through)
+                           : rectangle_mesh(Eigen::Vector2d::Zero(), nx, nx, nx, nx);
     add_body(s, mesh, make_material(MaterialModel::SaintVenantKirchhoff, 100.0, 0.3, 1e-3));
     const double dt = 0.01;
     const Vec q0 = s.initial_positions();
-    // A deformed state for the second set-up: same pattern, other values.
+    // A deformed state for the second set-up: same pattern, other values,
+    // displacements of 1e-4 (the elements are 0.02 .. 1 across): strains a
+    // time step brings, not inverted elements (a relative 1e-3 of the
+    // coordinates was that on large meshes, and KLU pivoted afresh with
+    // ruinous fill).
     Vec q1 = q0;
-    for (Eigen::Index i = 0; i < q1.size(); ++i) q1[i] *= 1.0 + 1e-3 * std::sin(0.1 * double(i));
+    for (Eigen::Index i = 0; i < q1.size(); ++i) q1[i] += 1e-4 * std::sin(0.1 * double(i));
     const SparseMatrix a0 = iteration_matrix(s, q0, dt), a1 = iteration_matrix(s, q1, dt);
     const long n = a0.cols();
+    // KLU's estimate from the analysis alone (AMD, as the Newton solve).
+    klu_l_common common;
+    klu_l_defaults(&common);
+    common.ordering = 0;
+    klu_l_symbolic* sym = klu_l_analyze(n, const_cast<long*>(a0.outerIndexPtr()),
+                                        const_cast<long*>(a0.innerIndexPtr()), &common);
+    const double fill = sym ? (sym->lnz + sym->unz) / double(n) : -1.0;
+    const double flops = sym ? sym->est_flops / double(n) : -1.0;
+    if (sym) klu_l_free_symbolic(&sym, &common);
     for (const auto backend : {KluSolver::Backend::Klu, KluSolver::Backend::Umfpack}) {
       KluSolver lu(ctx, KluSolver::Ordering::Amd, KluSolver::Pivoting::Kept, backend);
       SUNMatrix m = SUNSparseMatrix(n, n, a0.nonZeros(), CSC_MAT, ctx);
@@ -94,7 +115,8 @@ int main(int argc, char** argv) {
       const double solve = cpu() - t0;
       const Eigen::Map<const Vec> xv(N_VGetArrayPointer(x), n);
       const double residual = (a1 * xv - Vec::Ones(n)).norm() / std::sqrt(double(n));
-      std::printf("%9ld %10ld  %-8s %9.4f %9.4f %9.4f %10.2e%s\n", n, long(a0.nonZeros()),
+      std::printf("%-14s %9ld %10ld %9.1f %11.3g  %-8s %9.4f %9.4f %9.4f %10.2e%s\n",
+                  spec.c_str(), n, long(a0.nonZeros()), fill, flops,
                   backend == KluSolver::Backend::Klu ? "klu" : "umfpack", first, next, solve,
                   residual, flag ? "  (a set-up or solve failed)" : "");
       std::fflush(stdout);

@@ -272,7 +272,7 @@ void IdaStepper::Impl::allocate(double t, const Vec& y0) {
                 "SUNSparseMatrix"));
   klu = std::make_unique<KluSolver>(ctx.get(), KluSolver::Ordering::Colamd,
                                     KluSolver::Pivoting::EverySetup, set.linear_solver,
-                                    set.umfpack_from);
+                                    set.umfpack_flops);
 }
 
 // IDA's own first step makes ||h0 y'||_WRMS = 1/2, which at tight

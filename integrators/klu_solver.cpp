@@ -35,7 +35,7 @@ struct KluSolver::Impl {
   SUNLinearSolver shell = nullptr;
   Pivoting pivoting = Pivoting::Kept;
   Backend backend = Backend::Klu;  // as asked
-  long umfpack_from = kUmfpackFrom;
+  double umfpack_flops = kUmfpackFlops;
   Backend in_use = Backend::Auto;  // as chosen at the last analysis
   void* umf_symbolic = nullptr;
   void* umf_numeric = nullptr;
@@ -93,6 +93,20 @@ struct KluSolver::Impl {
     return SUNLS_SUCCESS;
   }
 
+  // KLU's estimate of a factorization's flops on the analysed pattern: its
+  // AMD ordering's count (COLAMD gives none, so a pattern analysed with it
+  // is ordered once more with AMD for the estimate).
+  double estimated_flops(long n, long* ap, long* ai) {
+    if (common.ordering == static_cast<int>(Ordering::Amd)) return symbolic->est_flops;
+    klu_l_common c = common;
+    c.ordering = static_cast<int>(Ordering::Amd);
+    klu_l_symbolic* amd = klu_l_analyze(n, ap, ai, &c);
+    if (!amd) return 0.0;
+    const double flops = amd->est_flops;
+    klu_l_free_symbolic(&amd, &c);
+    return flops;
+  }
+
   static Impl& of(SUNLinearSolver s) { return *static_cast<Impl*>(s->content); }
 
   // Factorization with partial pivoting on the analysed pattern.
@@ -116,18 +130,21 @@ struct KluSolver::Impl {
     if (pattern_changed || !analysed()) {
       free_numeric();
       free_symbolic();
-      in_use = backend != Backend::Auto ? backend
-               : n >= umfpack_from      ? Backend::Umfpack
-                                        : Backend::Klu;
+      in_use = backend == Backend::Umfpack ? Backend::Umfpack : Backend::Klu;
+      if (in_use == Backend::Klu) {
+        symbolic = klu_l_analyze(n, ap, ai, &common);
+        if (!symbolic) return SUNLS_PACKAGE_FAIL_UNREC;
+        if (backend == Backend::Auto && estimated_flops(n, ap, ai) >= umfpack_flops * double(n)) {
+          free_symbolic();
+          in_use = Backend::Umfpack;
+        }
+      }
       if (in_use == Backend::Umfpack) {
         if (umfpack_dl_symbolic(n, n, ap, ai, ax, &umf_symbolic, umf_control, umf_info) !=
             UMFPACK_OK) {
           free_symbolic();
           return SUNLS_PACKAGE_FAIL_UNREC;
         }
-      } else {
-        symbolic = klu_l_analyze(n, ap, ai, &common);
-        if (!symbolic) return SUNLS_PACKAGE_FAIL_UNREC;
       }
       ++counters.analyses;
       pattern_changed = false;
@@ -180,12 +197,12 @@ struct KluSolver::Impl {
 };
 
 KluSolver::KluSolver(SUNContext ctx, Ordering ordering, Pivoting pivoting, Backend backend,
-                     long umfpack_from)
+                     double umfpack_flops)
     : impl_(std::make_unique<Impl>()) {
   Impl& m = *impl_;
   m.pivoting = pivoting;
   m.backend = backend;
-  m.umfpack_from = umfpack_from;
+  m.umfpack_flops = umfpack_flops;
   umfpack_dl_defaults(m.umf_control);
   // The same fill-reducing ordering as KLU's (AMD on A + A^T: our matrices
   // are structurally symmetric), and no iterative refinement (KLU has none,

@@ -38,14 +38,20 @@
 // `initialize` keeps everything; nothing else in SUNDIALS needs to change.
 //
 // Large matrices: KLU is a left-looking sparse LU without dense kernels,
-// made for circuit matrices; on FE iteration matrices its factorization
-// grows like n^1.7..2 (docs/performance.md §11). UMFPACK (multifrontal,
-// dense BLAS kernels on its frontal matrices, same AMD ordering) factors a
-// 10^5-dof Q1 block 1.4x and a 2*10^5-dof block 2.0x faster than KLU
-// refactors it; below 5*10^4 KLU's refactorization is the faster.
-// Backend::Auto takes KLU below `umfpack_from` unknowns and UMFPACK from
-// there on; each can be forced. UMFPACK keeps its symbolic analysis while the
-// pattern holds and factors afresh (with its own pivoting) at every set-up.
+// made for circuit matrices; where the factors fill in (a large 2-D mesh
+// that is not thin) its refactorization grows like n^1.9 (docs/performance.md
+// §11). UMFPACK (multifrontal, dense BLAS kernels on its frontal matrices,
+// same AMD ordering) factors a 10^5-dof square Q1 block 1.33x, a 2*10^5-dof
+// one 1.8x and a 4*10^5-dof one 2.9x faster than KLU refactors it; it
+// keeps its symbolic analysis while the pattern holds and factors afresh
+// (with its own pivoting) at every set-up.
+//
+// What decides is the fill, not the size: on a long thin ring of 10^5 dofs
+// KLU refactors as fast as UMFPACK factors. Backend::Auto asks KLU's
+// analysis (AMD, cheap beside a factorization) for its estimate of the
+// factorization's flops and takes UMFPACK from `umfpack_flops` per unknown
+// on (measured crossover 3e4: square blocks of 5*10^4 dofs, rings of 10^5
+// at 2.5e4 still KLU's); each backend can be forced.
 #pragma once
 
 #include <sundials/sundials_linearsolver.h>
@@ -63,8 +69,9 @@ class KluSolver {
   enum class Pivoting { Kept, EverySetup };
   /// Which sparse LU factors the matrix; Auto: by size.
   enum class Backend { Auto, Klu, Umfpack };
-  /// Auto's threshold (unknowns): measured crossover, docs/performance.md.
-  static constexpr long kUmfpackFrom = 50000;
+  /// Auto's threshold: KLU's estimated factorization flops per unknown
+  /// from which UMFPACK factors faster (docs/performance.md §11).
+  static constexpr double kUmfpackFlops = 3e4;
 
   struct Counters {
     long analyses = 0;                // symbolic analyses (a new pattern)
@@ -74,7 +81,7 @@ class KluSolver {
   };
 
   KluSolver(SUNContext ctx, Ordering ordering, Pivoting pivoting, Backend backend = Backend::Klu,
-            long umfpack_from = kUmfpackFrom);
+            double umfpack_flops = kUmfpackFlops);
   ~KluSolver();
   KluSolver(const KluSolver&) = delete;
   KluSolver& operator=(const KluSolver&) = delete;

@@ -76,7 +76,7 @@ struct NewtonSolver::Impl {
     // default COLAMD (measured on the bearing: see docs/performance.md). The
     // solver keeps its analysis across KINSol calls while the pattern holds.
     klu = std::make_unique<KluSolver>(ctx.get(), KluSolver::Ordering::Amd,
-                                      KluSolver::Pivoting::Kept, s.linear_solver, s.umfpack_from);
+                                      KluSolver::Pivoting::Kept, s.linear_solver, s.umfpack_flops);
     kin.reset(check_ptr(KINCreate(ctx.get()), "KINCreate"));
     check(KINInit(kin.get(), &Impl::residual_cb, u.get()), "KINInit");
     check(KINSetUserData(kin.get(), this), "KINSetUserData");

@@ -44,10 +44,10 @@ struct NewtonSettings {
   // cost the flat-face blocks 3.5e-8 of their energy); Newton then goes on
   // until the energy residual is met or it stalls at round-off.
   double energy_tolerance = 1e-13;
-  // The sparse LU (integrators/klu_solver.hpp): Auto takes KLU below
-  // umfpack_from unknowns and UMFPACK from there on.
+  // The sparse LU (integrators/klu_solver.hpp): Auto takes UMFPACK where
+  // KLU's analysis estimates umfpack_flops or more per unknown, else KLU.
   KluSolver::Backend linear_solver = KluSolver::Backend::Auto;
-  long umfpack_from = KluSolver::kUmfpackFrom;
+  double umfpack_flops = KluSolver::kUmfpackFlops;
   // Modified Newton: a Jacobian (and its factorization) serves up to this
   // many iterations of a solve; 1 is Newton's method. A reused Jacobian is
   // dropped as soon as an iteration reduces the residual by less than

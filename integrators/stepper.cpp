@@ -66,7 +66,7 @@ std::unique_ptr<Stepper> make_stepper(const std::string& name, const System& sys
     IdaSettings ida = settings.ida;
     ida.gap_tolerance = settings.contact.gap_tolerance;
     ida.linear_solver = settings.newton.linear_solver;
-    ida.umfpack_from = settings.newton.umfpack_from;
+    ida.umfpack_flops = settings.newton.umfpack_flops;
     return std::make_unique<IdaStepper>(system, ida);
   }
   if (name == "galpha") {

@@ -13,6 +13,7 @@
 //    (non-zero discrete-gradient correction) conserves energy too;
 //  - observed order 2 of EM and midpoint on a ring.
 #include <gtest/gtest.h>
+#include <sunmatrix/sunmatrix_sparse.h>
 
 #include <chrono>
 #include <cmath>
@@ -33,6 +34,7 @@
 #include "integrators/energy_momentum.hpp"
 #include "integrators/schemes.hpp"
 #include "integrators/stepper.hpp"
+#include "integrators/sundials_support.hpp"
 #include "run/run.hpp"
 
 namespace emdae {
@@ -877,7 +879,7 @@ TEST(NewtonSolve, KluAnalysisAndPivotsKeptAcrossSteps) {
 
 // The two sparse LUs behind the Newton solve (integrators/klu_solver.hpp)
 // give the same run: 30 steps of the spinning ring with KLU and with UMFPACK,
-// forced and chosen by Auto below a threshold lowered to the ring's size.
+// forced and chosen by Auto under a threshold lowered below the ring's fill.
 // UMFPACK factors afresh at every set-up (no refactorization), KLU once and
 // then refactors; the solves differ by round-off only, so every step takes
 // the same iterations and the states agree to the Newton tolerance (seen:
@@ -887,20 +889,19 @@ TEST(NewtonSolve, UmfpackAndKluGiveTheSameSteps) {
   const System* s = &model->system();
   struct Case {
     KluSolver::Backend asked;
-    long from;
+    double flops;
     KluSolver::Backend chosen;
   };
-  const long n = s->n_dofs();
   std::vector<State> ends;
   std::vector<std::vector<int>> iterations;
   for (const Case c :
-       {Case{KluSolver::Backend::Klu, KluSolver::kUmfpackFrom, KluSolver::Backend::Klu},
-        Case{KluSolver::Backend::Umfpack, KluSolver::kUmfpackFrom, KluSolver::Backend::Umfpack},
-        Case{KluSolver::Backend::Auto, n, KluSolver::Backend::Umfpack},
-        Case{KluSolver::Backend::Auto, KluSolver::kUmfpackFrom, KluSolver::Backend::Klu}}) {
+       {Case{KluSolver::Backend::Klu, KluSolver::kUmfpackFlops, KluSolver::Backend::Klu},
+        Case{KluSolver::Backend::Umfpack, KluSolver::kUmfpackFlops, KluSolver::Backend::Umfpack},
+        Case{KluSolver::Backend::Auto, 1.0, KluSolver::Backend::Umfpack},
+        Case{KluSolver::Backend::Auto, KluSolver::kUmfpackFlops, KluSolver::Backend::Klu}}) {
     NewtonSettings ns{1e-10, 25, false};
     ns.linear_solver = c.asked;
-    ns.umfpack_from = c.from;
+    ns.umfpack_flops = c.flops;
     EnergyMomentumStepper em(*s, ns);
     State st = initial_state(*s);
     const double h0 = measure(*s, st.q, st.v, st.t).total();
@@ -965,6 +966,39 @@ TEST(NewtonSolve, ReusedJacobiansKeepTheFigures) {
   EXPECT_LT(setups[1], its[1]);
   EXPECT_LT(setups[1], setups[0]);
   EXPECT_LE((ends[1].q - ends[0].q).cwiseAbs().maxCoeff(), 1e-10);
+}
+
+// Auto chooses by fill, not by size: with the threshold at 5e3 estimated
+// flops per unknown, a 50 x 50 square block (5 202 dofs, 7.2e3 flops per
+// unknown by KLU's analysis) goes to UMFPACK and a thin ring of 400 x 10
+// elements (8 800 dofs, 3.1e3) stays on KLU, although it is the larger.
+TEST(NewtonSolve, AutoChoosesTheLuByTheFillNotTheSize) {
+  const auto ctx = sundials::make_context();
+  const auto chosen = [&](const Mesh& mesh) {
+    System s(2);
+    add_body(s, mesh, make_material(MaterialModel::SaintVenantKirchhoff, 100.0, 0.3, 1e-3));
+    Assembler as(s);
+    Triplets trip;
+    const Vec q = s.initial_positions();
+    Vec g = Vec::Zero(s.n_dofs());
+    as.add_mass(trip, 2.0 / (0.01 * 0.01));
+    as.add_potential_forces(GradientKind::Discrete, q, q, 0.0, 0.01, g, &trip);
+    SparseMatrix j(s.n_dofs(), s.n_dofs());
+    j.setFromTriplets(trip.begin(), trip.end());
+    j.makeCompressed();
+    KluSolver lu(ctx.get(), KluSolver::Ordering::Amd, KluSolver::Pivoting::Kept,
+                 KluSolver::Backend::Auto, 5e3);
+    SUNMatrix a = SUNSparseMatrix(j.rows(), j.cols(), j.nonZeros(), CSC_MAT, ctx.get());
+    lu.load(j, a);
+    EXPECT_EQ(SUNLinSolSetup(lu.get(), a), SUNLS_SUCCESS);
+    SUNMatDestroy(a);
+    return std::make_pair(s.n_dofs(), lu.backend_in_use());
+  };
+  const auto square = chosen(rectangle_mesh(Eigen::Vector2d::Zero(), 50, 50, 50, 50));
+  const auto ring = chosen(ring_mesh(Eigen::Vector2d::Zero(), 9.0, 10.0, 400, 10));
+  EXPECT_LT(square.first, ring.first);
+  EXPECT_EQ(square.second, KluSolver::Backend::Umfpack);
+  EXPECT_EQ(ring.second, KluSolver::Backend::Klu);
 }
 
 // IDA's iteration matrix through UMFPACK: the same run as through KLU, to
