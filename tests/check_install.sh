@@ -2,20 +2,22 @@
 # `cmake --install` into a fresh prefix, then the installed command and (when
 # the module is built) the installed Python package are run from outside the
 # source and build trees: what is installed must stand on its own.
-#   check_install.sh BUILD_DIR [PYTHON PYTHON_INSTALL_DIR]
+#   check_install.sh BUILD_DIR SCENE [PYTHON PYTHON_INSTALL_DIR]
+# SCENE is copied under the prefix, as a user's own scene file would be.
 set -euo pipefail
 build="$1"
-python="${2:-}"
-pydir="${3:-}"
+scene="$2"
+python="${3:-}"
+pydir="${4:-}"
 prefix="$(mktemp -d)"
 trap 'rm -rf "$prefix"' EXIT
 cmake --install "$build" --prefix "$prefix" >/dev/null
+cp "$scene" "$prefix/scene.toml"
 cd "$prefix"   # nothing of the project's trees on any path from here
 
 test -x bin/emdae || { echo "check_install: no bin/emdae under the prefix" >&2; exit 1; }
 bin/emdae --version
-# The built-in default scene, shortened: the command needs nothing else.
-bin/emdae run --set time.t_end=0.2 --out run >/dev/null
+bin/emdae run scene.toml --t-end 0.2 --out run -q
 grep -q '"status": "ok"' run/summary.json ||
   { echo "check_install: the installed emdae's run did not complete" >&2; exit 1; }
 
