@@ -69,6 +69,7 @@ struct ImpactCounters {
   long location_solves = 0;  // trial solves over [0, tau]
   long location_iterations = 0;
   long velocity_updates = 0;
+  long kept_entries = 0;  // nodes that kept a gap below -tol (keep_deep_entries)
 };
 
 class ContactStepper {
@@ -80,6 +81,14 @@ class ContactStepper {
   /// One step of length dt from `state` (whose contact search is prepared);
   /// on failure `state` is unchanged.
   StepStats step(SubstepScheme& scheme, State& state, double dt);
+
+  /// The last resort of a step that failed at the smallest step allowed
+  /// (Stepper::last_resort): in the next step only, an active node that
+  /// started the sub-step below -gap_tolerance and with which Newton fails
+  /// keeps its gap instead of being pulled to 0 (ImpactCounters::kept_entries
+  /// counts them; the gap is reported as the active gap violation it is).
+  /// False if it is on already or the system has no contact.
+  bool keep_deep_entries();
 
   const ActiveSet& active_set() const { return set_; }
   ImpactTreatment treatment() const { return impact_; }
@@ -103,6 +112,7 @@ class ContactStepper {
   // Active nodes that entered at a jump of their function and keep their
   // gap as target (locate()).
   std::vector<int> kept_;
+  bool keep_deep_ = false;  // keep_deep_entries() for the current step
 };
 
 }  // namespace emdae

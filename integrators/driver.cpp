@@ -20,6 +20,7 @@ RunOutcome integrate(Stepper& stepper, State& state, const TimeSettings& time,
   double& h = d.h;
   int& successes_at_h = d.successes_at_h;
   int failures = 0;
+  bool tried_last_resort = false;
   while (state.t < time.t_end - eps) {
     if (d.pause_at > 0 && d.steps >= d.pause_at) {
       out.paused = true;
@@ -33,6 +34,12 @@ RunOutcome integrate(Stepper& stepper, State& state, const TimeSettings& time,
       ++failures;
       if (on_failure) on_failure(state.t, step, stats);
       if (step / 2 < min_dt) {
+        // Once per step: the stepper's last resort, then the same step again.
+        if (!tried_last_resort && stepper.last_resort()) {
+          tried_last_resort = true;
+          ++d.last_resort_steps;
+          continue;
+        }
         std::ostringstream msg;
         msg.precision(6);
         // IDA runs its own corrector and error test, not our Newton solve.
@@ -53,6 +60,7 @@ RunOutcome integrate(Stepper& stepper, State& state, const TimeSettings& time,
     out.newton_iterations += stats.iterations;
     const int cutbacks = failures;
     failures = 0;
+    tried_last_resort = false;
     // Grow back towards the nominal step after a few quiet steps.
     if (h < time.dt && ++successes_at_h >= 4) {
       h = std::min(time.dt, 2 * h);

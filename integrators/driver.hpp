@@ -39,6 +39,7 @@ struct DriverState {
   double h = 0.0;          // the step the loop goes on with (0: time.dt)
   int successes_at_h = 0;  // accepted steps at h since it was cut or grown
   long steps = 0;          // accepted steps so far
+  long last_resort_steps = 0;  // steps tried again with Stepper::last_resort
   long pause_at = 0;       // > 0: return (RunOutcome::paused) once steps reaches it
 };
 

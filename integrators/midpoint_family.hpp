@@ -58,6 +58,7 @@ class MidpointFamilyStepper : public Stepper, public SubstepScheme {
   MidpointFamilyStepper(const System& system, GradientKind kind, NewtonSettings newton,
                         MidpointFamilySettings scheme);
   StepStats step(State& state, double dt) override;
+  bool last_resort() override { return contact_.keep_deep_entries(); }
 
   KluSolver::Counters klu_counters() const { return newton_.klu_counters(); }
   const ImpactCounters& impact_counters() const { return contact_.counters(); }

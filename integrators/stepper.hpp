@@ -76,6 +76,12 @@ class Stepper {
   virtual ~Stepper() = default;
   virtual std::string name() const = 0;
   virtual StepStats step(State& state, double dt) = 0;
+  /// Called when a step has failed at the smallest step the run allows:
+  /// switch on, for the next try of that step only, a fallback that gives
+  /// up some accuracy rather than the run (em and midpoint: deep contact
+  /// entries keep their gap, ContactStepper::keep_deep_entries). False if
+  /// there is none, or it was just tried.
+  virtual bool last_resort() { return false; }
 };
 
 /// What em and midpoint do when a node hits (integrators/contact_step.hpp);

@@ -357,13 +357,14 @@ RunResult::End integrate_model(const std::function<std::unique_ptr<Stepper>()>& 
     end = RunResult::End::InternalError;
   }
   info.cpu_seconds = cpu_now() - cpu_start;
+  info.last_resort_steps = driver.last_resort_steps;
   return end;
 }
 
 // --- checkpoints --------------------------------------------------------------------
 
-// 2: with the trajectories' place.
-constexpr const char* kCheckpointMagic = "emdae checkpoint 2";
+// 2: with the trajectories' place; 3: with the driver's last-resort steps.
+constexpr const char* kCheckpointMagic = "emdae checkpoint 3";
 
 // What a checkpoint holds besides the recorder: the loop, the state, where
 // the history and the fields are.
@@ -398,6 +399,7 @@ void write_checkpoint(const std::string& dir, const std::string& identity, const
   put(out, c.driver.h);
   put(out, c.driver.successes_at_h);
   put(out, c.driver.steps);
+  put(out, c.driver.last_resort_steps);
   put(out, c.state.t);
   put_vec(out, c.state.q);
   put_vec(out, c.state.v);
@@ -443,6 +445,7 @@ Checkpoint read_checkpoint(const std::string& dir, const std::string& identity,
     c.driver.h = get<double>(in);
     c.driver.successes_at_h = get<int>(in);
     c.driver.steps = get<long>(in);
+    c.driver.last_resort_steps = get<long>(in);
     c.state.t = get<double>(in);
     c.state.q = get_vec(in);
     c.state.v = get_vec(in);

@@ -373,16 +373,23 @@ double weighted_touch(Model& m, const Eigen::Vector2d& d, double dt, double reac
 
 // --- the test ----------------------------------------------------------------------
 
-class ImpactSweep : public ::testing::TestWithParam<int> {};
+// One case run and judged: what it is, its result and what misses a bound.
+struct CaseRun {
+  std::string what;
+  RunResult result;
+  std::vector<std::string> violations;
+};
 
-TEST_P(ImpactSweep, EnergyMomentumThroughTheImpact) {
-  const int k = GetParam();
+CaseRun run_case(int k) {
+  CaseRun out;
   Placed p = make_case(k);
   std::unique_ptr<Model> model;
   try {
     model = build(p);
   } catch (const std::exception& e) {
-    FAIL() << describe(p.c) << ": cannot build: " << e.what();
+    out.what = describe(p.c);
+    out.violations.push_back(std::string("cannot build: ") + e.what());
+    return out;
   }
   // The run ends kStepsAfterTouch steps after the first step that ends in
   // contact; t_end only bounds it: 4 kStepsAfterTouch steps after the
@@ -397,7 +404,8 @@ TEST_P(ImpactSweep, EnergyMomentumThroughTheImpact) {
   c.t_end =
       (std::ceil((c.t_touch + 0.5 * std::min(r0, r1) / c.closing) / c.dt) + 4 * kStepsAfterTouch) *
       c.dt;
-  const std::string what = describe(c);
+  out.what = describe(c);
+  const std::string& what = out.what;
   RunSettings settings;
   settings.name = "sweep case " + std::to_string(k);
   settings.scheme = "em";
@@ -405,15 +413,16 @@ TEST_P(ImpactSweep, EnergyMomentumThroughTheImpact) {
   settings.time = TimeSettings{c.dt, c.t_end, 0.0};
   settings.output.vtu_every = 0;
   // To look at a case: EMDAE_SWEEP_OUT=dir writes its run's files there.
-  if (const char* out = std::getenv("EMDAE_SWEEP_OUT")) {
-    settings.out_dir = out;
+  if (const char* dir = std::getenv("EMDAE_SWEEP_OUT")) {
+    settings.out_dir = dir;
     settings.output.vtu_every = 1;
   }
   const System& system = model->system();
   ImpactWatch watch(&system, 1e-10, kStepsAfterTouch);
-  const RunResult r = run(*model, settings, &watch);
+  out.result = run(*model, settings, &watch);
+  const RunResult& r = out.result;
   const Summary& s = r.summary;
-  std::vector<std::string> violations;
+  std::vector<std::string>& violations = out.violations;
   ImpactVerdict v;
   if (!r.finished() && !(r.end == RunResult::End::Interrupted && watch.stopped())) {
     violations.push_back("run failed: " + s.status);
@@ -431,7 +440,34 @@ TEST_P(ImpactSweep, EnergyMomentumThroughTheImpact) {
               violations.empty() ? "ok" : "FAILED", what.c_str(), figures_line(s).c_str(),
               v.angular, j.initial, j.scale, violations.empty() ? "" : "\n  ",
               watch.first_energy_jump().c_str());
-  for (const auto& violation : violations) ADD_FAILURE() << what << ": " << violation;
+  return out;
+}
+
+class ImpactSweep : public ::testing::TestWithParam<int> {};
+
+TEST_P(ImpactSweep, EnergyMomentumThroughTheImpact) {
+  const CaseRun c = run_case(GetParam());
+  for (const auto& violation : c.violations) ADD_FAILURE() << c.what << ": " << violation;
+}
+
+// Cases 122 and 163 (kind A, were N): a corner of the slave found already
+// 1.1e-2 inside at a step's start by the search (no bracket to locate its
+// impact in), entering with target 0. Newton could not pull it out within
+// any step down to min_dt, and the run failed. With the driver's last resort
+// (Stepper::last_resort) the corner keeps its gap: the run reaches its end
+// with energy and momenta conserved, the summary counts the step, and the
+// gap is reported as the violation it is (the one bound these cases miss).
+TEST(ImpactSweepLastResort, ACornerFoundInsideKeepsItsGapInsteadOfFailingTheRun) {
+  for (int k : {122, 163}) {
+    const CaseRun c = run_case(k);
+    const Summary& s = c.result.summary;
+    ASSERT_NE(s.status.rfind("Newton failed", 0), 0u) << c.what << ": " << s.status;
+    EXPECT_GE(s.last_resort_steps, 1) << c.what;
+    ASSERT_TRUE(s.contact.has_value()) << c.what;
+    EXPECT_GT(s.contact->gap_violation_max, 1e-3) << c.what;
+    ASSERT_EQ(c.violations.size(), 1u) << c.what << ": " << ::testing::PrintToString(c.violations);
+    EXPECT_NE(c.violations[0].find("gap"), std::string::npos) << c.what << ": " << c.violations[0];
+  }
 }
 
 bool known_failing(int k) {

@@ -81,6 +81,7 @@ Summary summarize(const RunInfo& info, const System& system, const Recorder& rec
   s.newton_iterations = recorder.newton_iterations();
   s.newton_iterations_max_per_step = recorder.newton_iterations_max_per_step();
   s.cutbacks = recorder.cutbacks();
+  s.last_resort_steps = info.last_resort_steps;
   s.cpu_seconds = info.cpu_seconds;
   s.energy_initial = recorder.initial().quantities.total();
   s.energy_rel_error_max = recorder.energy_rel_error_max();
@@ -309,6 +310,7 @@ nlohmann::ordered_json to_json(const Summary& s) {
   j["newton_iterations"] = s.newton_iterations;
   j["newton_iterations_max_per_step"] = s.newton_iterations_max_per_step;
   j["cutbacks"] = s.cutbacks;
+  if (s.last_resort_steps > 0) j["last_resort_steps"] = s.last_resort_steps;
   j["cpu_seconds"] = s.cpu_seconds;
   j["energy_initial"] = s.energy_initial;
   j["energy_rel_error_max"] = s.energy_rel_error_max;
@@ -377,6 +379,11 @@ void print_summary(std::ostream& out, const Summary& s, const std::string& dir, 
     row("steps", fmt::format("{} to t = {} ({} Newton iterations, max {} per step, {} cut-backs)",
                              s.steps, s.t_reached, s.newton_iterations,
                              s.newton_iterations_max_per_step, s.cutbacks));
+    if (s.last_resort_steps > 0)
+      row("last resort",
+          fmt::format("{} step(s) failed at min_dt and passed with contact nodes that entered "
+                      "inside keeping their gap (see the active gap violation)",
+                      s.last_resort_steps));
     row("cpu time", fmt::format("{:.3f} s", s.cpu_seconds));
     if (s.statics) row("statics", statics_text(*s.statics));
     // With loads the energy error is that of the load-free intervals, and the

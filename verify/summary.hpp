@@ -93,6 +93,9 @@ struct Summary {
   long newton_iterations = 0;
   int newton_iterations_max_per_step = 0;
   long cutbacks = 0;
+  // Steps that failed at min_dt and passed with the stepper's last resort
+  // (Stepper::last_resort: deep contact entries keeping their gap).
+  long last_resort_steps = 0;
   double cpu_seconds = 0.0;
   double energy_initial = 0.0;
   double energy_rel_error_max = 0.0;
@@ -134,6 +137,7 @@ struct RunInfo {
   double dt = 0.0, t_end = 0.0;
   double cpu_seconds = 0.0;
   std::string status = "ok";
+  long last_resort_steps = 0;                  // RunOutcome::last_resort_steps
   std::optional<StaticsOutcome> statics;       // when the scene ran [statics]
   bool static_analysis = false;                // the static solve was the whole run
   int increments = 0;                          // static: load increments asked for
