@@ -241,15 +241,15 @@ StepStats ContactStepper::substep(SubstepScheme& scheme, State& s, double h) {
       // 122). As at an engagement jump (locate()), it keeps its gap instead
       // while it stays active, and the sub-step is solved again.
       bool kept_more = false;
-      for (int id : s.active) {
-        const double g = set_.gap(id, s.q);
-        if (keep_deep_ && std::isfinite(g) && g < -set_.gap_tolerance() && !set_.penalized(id) &&
-            !contains(kept_, id)) {
-          kept_.push_back(id);
-          kept_more = true;
-          ++counters_.kept_entries;
+      if (keep_deep_)
+        for (int id : s.active) {
+          const double g = set_.gap(id, s.q);
+          if (std::isfinite(g) && g < -set_.gap_tolerance() && !set_.penalized(id) &&
+              !contains(kept_, id)) {
+            kept_.push_back(id);
+            kept_more = true;
+          }
         }
-      }
       if (kept_more) {
         have_guess = false;
         continue;

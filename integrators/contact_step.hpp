@@ -69,7 +69,6 @@ struct ImpactCounters {
   long location_solves = 0;  // trial solves over [0, tau]
   long location_iterations = 0;
   long velocity_updates = 0;
-  long kept_entries = 0;  // nodes that kept a gap below -tol (keep_deep_entries)
 };
 
 class ContactStepper {
@@ -85,8 +84,8 @@ class ContactStepper {
   /// The last resort of a step that failed at the smallest step allowed
   /// (Stepper::last_resort): in the next step only, an active node that
   /// started the sub-step below -gap_tolerance and with which Newton fails
-  /// keeps its gap instead of being pulled to 0 (ImpactCounters::kept_entries
-  /// counts them; the gap is reported as the active gap violation it is).
+  /// keeps its gap instead of being pulled to 0 (the gap is reported as the
+  /// active gap violation it is; DriverState::last_resort_steps counts the steps).
   /// False if it is on already or the system has no contact.
   bool keep_deep_entries();
 

@@ -137,7 +137,7 @@ struct RunInfo {
   double dt = 0.0, t_end = 0.0;
   double cpu_seconds = 0.0;
   std::string status = "ok";
-  long last_resort_steps = 0;                  // RunOutcome::last_resort_steps
+  long last_resort_steps = 0;                  // DriverState::last_resort_steps
   std::optional<StaticsOutcome> statics;       // when the scene ran [statics]
   bool static_analysis = false;                // the static solve was the whole run
   int increments = 0;                          // static: load increments asked for
