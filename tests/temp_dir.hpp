@@ -109,4 +109,14 @@ inline nlohmann::json read_json(const std::filesystem::path& path) {
   return nlohmann::json::parse(in);
 }
 
+// The value of attribute `name` in the XML tag that starts `tag`; empty where
+// the tag has no such attribute.
+inline std::string attribute(const std::string& tag, const std::string& name) {
+  const std::string key = " " + name + "=\"";
+  const std::size_t p = tag.find(key);
+  if (p == std::string::npos || p > tag.find('>')) return "";
+  const std::size_t b = p + key.size();
+  return tag.substr(b, tag.find('"', b) - b);
+}
+
 }  // namespace emdae::test_systems

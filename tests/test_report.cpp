@@ -42,6 +42,7 @@ const char* kChromium = "/usr/bin/chromium";
 
 using Result = test_systems::CommandResult;
 
+using test_systems::attribute;
 using test_systems::example;
 using test_systems::quote;
 using test_systems::read_text;
@@ -178,15 +179,6 @@ std::string nth_block(const std::string& text, const std::string& open, const st
   if (p == std::string::npos) return "";
   const std::size_t e = text.find(close, p);
   return e == std::string::npos ? "" : text.substr(p, e + close.size() - p);
-}
-
-// The value of attribute `name` in the tag that starts `tag`.
-std::string attribute(const std::string& tag, const std::string& name) {
-  const std::string key = " " + name + "=\"";
-  const std::size_t p = tag.find(key);
-  if (p == std::string::npos || p > tag.find('>')) return "";
-  const std::size_t b = p + key.size();
-  return tag.substr(b, tag.find('"', b) - b);
 }
 
 // The x axis' tick labels of a gnuplot SVG: (position, value), left to

@@ -37,6 +37,7 @@ namespace emdae {
 namespace {
 
 namespace fs = std::filesystem;
+using test_systems::attribute;
 using test_systems::read_lines;
 using test_systems::read_text;
 using test_systems::TempDir;
@@ -191,16 +192,6 @@ INSTANTIATE_TEST_SUITE_P(Schemes, PendulumTrajectory, ::testing::Values("em", "m
 
 // The VTK points: one .vtp per field output step, indexed by
 // trajectories.pvd, holding the positions of the table's rows at that time.
-// The value of `name="..."` in the XML element that starts at `at`; empty
-// where the element has no such attribute.
-std::string attribute(const std::string& xml, std::size_t at, const std::string& name) {
-  const std::size_t end = xml.find('>', at);
-  const std::size_t key = xml.find(" " + name + "=\"", at);
-  if (key == std::string::npos || key > end) return "";
-  const std::size_t from = key + name.size() + 3;
-  return xml.substr(from, xml.find('"', from) - from);
-}
-
 TEST(Trajectories, VtkPointsMatchTheTable) {
   TempDir dir;
   auto scene = load_scene_text(pendulum_scene("em", 0.05, 1.0), "pendulum.toml");
@@ -213,8 +204,9 @@ TEST(Trajectories, VtkPointsMatchTheTable) {
   int files = 0;
   for (auto entry = pvd.find("<DataSet"); entry != std::string::npos;
        entry = pvd.find("<DataSet", entry + 1)) {
-    const double t = std::stod(attribute(pvd, entry, "timestep"));
-    const std::string vtp = read_text(dir.path() / "run" / attribute(pvd, entry, "file"));
+    const std::string tag = pvd.substr(entry, pvd.find('>', entry) - entry + 1);
+    const double t = std::stod(attribute(tag, "timestep"));
+    const std::string vtp = read_text(dir.path() / "run" / attribute(tag, "file"));
     EXPECT_NE(vtp.find("NumberOfPoints=\"1\""), std::string::npos);
     const auto at = vtp.find("Name=\"Points\"");
     ASSERT_NE(at, std::string::npos);
