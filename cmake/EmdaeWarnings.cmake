@@ -21,8 +21,10 @@ endif()
 # tests themselves, the command line, reports and studies) is compiled at -O1:
 # that halves its compile time, which is most of the sanitize build's, while
 # the numerical libraries (core, contact, integrators, run) stay at -O2.
-function(emdae_sanitize_at_o1 target)
+# Called at the top of those folders' CMakeLists.txt: every target made there
+# after it.
+macro(emdae_sanitize_at_o1)
   if(EMDAE_SANITIZE)
-    target_compile_options(${target} PRIVATE -O1)
+    add_compile_options(-O1)
   endif()
-endfunction()
+endmacro()
