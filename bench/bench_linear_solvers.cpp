@@ -18,11 +18,10 @@
 //   bench_linear_solvers [MESH ...]   (default 16 50 100 160 224 316)
 //   MESH: nx (an nx x nx square block) or ring:AROUND:THROUGH (a ring of
 //   radii 9 and 10, thin and long: little fill whatever its size)
+#include <klu.h>
 #include <nvector/nvector_serial.h>
 #include <sundials/sundials_context.h>
 #include <sunmatrix/sunmatrix_sparse.h>
-
-#include <klu.h>
 
 #include <cstdio>
 #include <cstdlib>
@@ -67,8 +66,8 @@ int main(int argc, char** argv) {
   if (argc > 1) meshes.assign(argv + 1, argv + argc);
   SUNContext ctx = nullptr;
   if (SUNContext_Create(nullptr, &ctx) != 0) return 1;
-  std::printf("%-14s %9s %10s %9s %11s  %-8s %9s %9s %9s %10s\n", "mesh", "dofs", "nnz",
-              "fill/dof", "flops/dof", "solver", "first_s", "next_s", "solve_s", "residual");
+  std::printf("%-14s %9s %10s %9s %11s  %-8s %9s %9s %9s %10s\n", "mesh", "dofs", "nnz", "fill/dof",
+              "flops/dof", "solver", "first_s", "next_s", "solve_s", "residual");
   for (const std::string& spec : meshes) {
     System s(2);
     int around = 0, through = 0;
@@ -97,7 +96,8 @@ int main(int argc, char** argv) {
     const double fill = sym ? (sym->lnz + sym->unz) / double(n) : -1.0;
     const double flops = sym ? sym->est_flops / double(n) : -1.0;
     if (sym) klu_l_free_symbolic(&sym, &common);
-    for (const auto backend : {KluSolver::Backend::Klu, KluSolver::Backend::Umfpack}) {
+    for (const auto backend :
+         {KluSolver::Backend::Klu, KluSolver::Backend::Umfpack, KluSolver::Backend::Amg}) {
       KluSolver lu(ctx, KluSolver::Ordering::Amd, KluSolver::Pivoting::Kept, backend);
       SUNMatrix m = SUNSparseMatrix(n, n, a0.nonZeros(), CSC_MAT, ctx);
       N_Vector b = N_VNew_Serial(n, ctx), x = N_VNew_Serial(n, ctx);
@@ -115,10 +115,15 @@ int main(int argc, char** argv) {
       const double solve = cpu() - t0;
       const Eigen::Map<const Vec> xv(N_VGetArrayPointer(x), n);
       const double residual = (a1 * xv - Vec::Ones(n)).norm() / std::sqrt(double(n));
-      std::printf("%-14s %9ld %10ld %9.1f %11.3g  %-8s %9.4f %9.4f %9.4f %10.2e%s\n",
-                  spec.c_str(), n, long(a0.nonZeros()), fill, flops,
-                  backend == KluSolver::Backend::Klu ? "klu" : "umfpack", first, next, solve,
-                  residual, flag ? "  (a set-up or solve failed)" : "");
+      std::printf("%-14s %9ld %10ld %9.1f %11.3g  %-8s %9.4f %9.4f %9.4f %10.2e%s\n", spec.c_str(),
+                  n, long(a0.nonZeros()), fill, flops,
+                  backend == KluSolver::Backend::Klu       ? "klu"
+                  : backend == KluSolver::Backend::Umfpack ? "umfpack"
+                                                           : "amg",
+                  first, next, solve, residual, flag ? "  (a set-up or solve failed)" : "");
+      if (backend == KluSolver::Backend::Amg)
+        std::printf("%-14s   GMRES iterations %ld, fallbacks %ld\n", "",
+                    lu.counters().krylov_iterations, lu.counters().amg_fallbacks);
       std::fflush(stdout);
       N_VDestroy(b);
       N_VDestroy(x);

@@ -11,6 +11,8 @@
 #include <type_traits>
 #include <vector>
 
+#include "integrators/amg.hpp"
+
 namespace emdae {
 
 static_assert(std::is_same_v<SuiteSparse_long, sunindextype> &&
@@ -23,6 +25,19 @@ namespace {
 // (klu_rcond: min |U_ii| / max |U_ii|) stays above this fraction of the last
 // fresh factorization's; below, the pivots have degraded and KLU pivots anew.
 constexpr double kRcondDrop = 1e-2;
+
+// AMG-preconditioned GMRES: the relative residual a solve must reach, the
+// restart length and the iteration limit of a solve (past it the matrix is
+// factored by UMFPACK, once, and counted as a fallback).
+constexpr double kKrylovTolerance = 1e-10;
+constexpr int kKrylovRestart = 30;
+constexpr int kKrylovMaxIterations = 300;
+
+// The AMG hierarchy of an earlier Jacobian preconditions the later ones of
+// the same pattern (the Krylov iteration always multiplies by the current
+// matrix, so Newton stays exact) until a solve takes more than this many
+// times the iterations of the first solve after the last build, plus two.
+constexpr double kAmgRebuildGrowth = 1.5;
 
 // SUNMatZero of a matrix that only KluSolver::load fills (keep_loaded).
 int keep_zero(SUNMatrix) {
@@ -52,6 +67,15 @@ struct KluSolver::Impl {
   const double* values = nullptr;  // the matrix's values (UMFPACK's solve reads them)
   std::vector<double> rhs;         // UMFPACK's right-hand side
   SUNMatrix loaded = nullptr;      // the matrix load() filled last
+  // Backend::Amg
+  Amg amg;
+  std::vector<double> krylov_work;
+  long n_in_use = 0;
+  const long* amg_ap = nullptr;  // the current matrix, for the Krylov products
+  const long* amg_ai = nullptr;
+  int iterations_after_build = -1;  // of the first solve after the last build
+  int last_iterations = 0;
+  bool rebuild = true;
 
   ~Impl() {
     free_numeric();
@@ -127,16 +151,35 @@ struct KluSolver::Impl {
     double* ax = SUNSparseMatrix_Data(a);
     values = ax;
     const long n = SUNSparseMatrix_Columns(a);
-    if (pattern_changed || !analysed()) {
+    amg_ap = ap;
+    amg_ai = ai;
+    n_in_use = n;
+    if (pattern_changed || !(analysed() || amg.built())) {
       free_numeric();
       free_symbolic();
+      pattern_changed = false;
+      if (backend == Backend::Amg && Amg::applies(n, ap, ai, ax, 2)) {
+        in_use = Backend::Amg;
+        ++counters.analyses;
+        return amg_build(ap, ai, ax);
+      }
+      amg.clear();
       in_use = backend == Backend::Umfpack ? Backend::Umfpack : Backend::Klu;
       if (in_use == Backend::Klu) {
         symbolic = klu_l_analyze(n, ap, ai, &common);
         if (!symbolic) return SUNLS_PACKAGE_FAIL_UNREC;
-        if (backend == Backend::Auto && estimated_flops(n, ap, ai) >= umfpack_flops * double(n)) {
-          free_symbolic();
-          in_use = Backend::Umfpack;
+        if (backend == Backend::Auto) {
+          const double flops = estimated_flops(n, ap, ai) / double(n);
+          if (flops >= kAmgFlops && Amg::applies(n, ap, ai, ax, 2)) {
+            free_symbolic();
+            in_use = Backend::Amg;
+            ++counters.analyses;
+            return amg_build(ap, ai, ax);
+          }
+          if (flops >= umfpack_flops) {
+            free_symbolic();
+            in_use = Backend::Umfpack;
+          }
         }
       }
       if (in_use == Backend::Umfpack) {
@@ -147,8 +190,12 @@ struct KluSolver::Impl {
         }
       }
       ++counters.analyses;
-      pattern_changed = false;
       return in_use == Backend::Umfpack ? umf_factor(ap, ai, ax) : factor(ap, ai, ax);
+    }
+    if (in_use == Backend::Amg) {
+      if (rebuild || last_iterations > kAmgRebuildGrowth * iterations_after_build + 2)
+        return amg_build(ap, ai, ax);
+      return SUNLS_SUCCESS;
     }
     if (in_use == Backend::Umfpack) return umf_factor(ap, ai, ax);
     if (pivoting == Pivoting::EverySetup) return factor(ap, ai, ax);
@@ -160,7 +207,54 @@ struct KluSolver::Impl {
     return factor(ap, ai, ax);
   }
 
+  int amg_build(const long* ap, const long* ai, const double* ax) {
+    amg.build(n_in_use, ap, ai, ax);
+    if (!amg.built()) return SUNLS_LUFACT_FAIL;
+    ++counters.amg_setups;
+    iterations_after_build = -1;
+    rebuild = false;
+    return SUNLS_SUCCESS;
+  }
+
+  // GMRES on the current matrix with the kept hierarchy; when it does not
+  // converge, once more on a hierarchy of the current matrix, and then
+  // UMFPACK.
+  int amg_solve(N_Vector x, N_Vector b) {
+    const long n = n_in_use;
+    const double* bp = N_VGetArrayPointer(b);
+    std::vector<double> rhs_copy(bp, bp + n);  // x and b may be the same vector
+    double* xp = N_VGetArrayPointer(x);
+    for (int attempt = 0; attempt < 2; ++attempt) {
+      if (attempt == 1 && amg_build(amg_ap, amg_ai, values) != SUNLS_SUCCESS) break;
+      const GmresResult r =
+          gmres(n, amg_ap, amg_ai, values, amg, rhs_copy.data(), xp, kKrylovTolerance,
+                kKrylovRestart, kKrylovMaxIterations, krylov_work);
+      ++counters.krylov_solves;
+      counters.krylov_iterations += r.iterations;
+      last_iterations = r.iterations;
+      if (iterations_after_build < 0) iterations_after_build = r.iterations;
+      if (r.converged) return SUNLS_SUCCESS;
+    }
+    ++counters.amg_fallbacks;
+    rebuild = true;
+    long* ap = const_cast<long*>(amg_ap);
+    long* ai = const_cast<long*>(amg_ai);
+    double* ax = const_cast<double*>(values);
+    void* sym = nullptr;
+    void* num = nullptr;
+    long status = umfpack_dl_symbolic(n, n, ap, ai, ax, &sym, umf_control, umf_info);
+    if (status == UMFPACK_OK)
+      status = umfpack_dl_numeric(ap, ai, ax, sym, &num, umf_control, umf_info);
+    if (status == UMFPACK_OK)
+      status =
+          umfpack_dl_solve(UMFPACK_A, ap, ai, ax, xp, rhs_copy.data(), num, umf_control, umf_info);
+    if (num) umfpack_dl_free_numeric(&num);
+    if (sym) umfpack_dl_free_symbolic(&sym);
+    return status == UMFPACK_OK ? SUNLS_SUCCESS : SUNLS_PACKAGE_FAIL_REC;
+  }
+
   int solve(N_Vector x, N_Vector b) {
+    if (in_use == Backend::Amg) return amg.built() ? amg_solve(x, b) : SUNLS_MEM_NULL;
     if (!factored()) return SUNLS_MEM_NULL;
     if (umf_numeric) {
       // UMFPACK solves out of place; x and b may be the same vector.
@@ -278,6 +372,22 @@ void KluSolver::load(const SparseMatrix& jac, SUNMatrix a) {
 
 void KluSolver::keep_loaded(SUNMatrix a) {
   a->ops->zero = &keep_zero;
+}
+
+const std::vector<std::string>& linear_solver_names() {
+  static const std::vector<std::string> names = {"auto", "klu", "umfpack", "amg"};
+  return names;
+}
+
+std::string linear_solver_name(KluSolver::Backend backend) {
+  return linear_solver_names()[static_cast<std::size_t>(backend)];
+}
+
+std::optional<KluSolver::Backend> linear_solver_from_name(const std::string& name) {
+  const auto& names = linear_solver_names();
+  const auto it = std::find(names.begin(), names.end(), name);
+  if (it == names.end()) return std::nullopt;
+  return static_cast<KluSolver::Backend>(it - names.begin());
 }
 
 }  // namespace emdae

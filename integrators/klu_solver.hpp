@@ -58,6 +58,9 @@
 #include <sundials/sundials_matrix.h>
 
 #include <memory>
+#include <optional>
+#include <string>
+#include <vector>
 
 #include "core/system.hpp"
 
@@ -67,17 +70,27 @@ class KluSolver {
  public:
   enum class Ordering { Amd = 0, Colamd = 1 };
   enum class Pivoting { Kept, EverySetup };
-  /// Which sparse LU factors the matrix; Auto: by size.
-  enum class Backend { Auto, Klu, Umfpack };
+  /// Which solver: a sparse LU (KLU, UMFPACK) or AMG-preconditioned GMRES
+  /// (integrators/amg.hpp); Auto: by the fill, see above.
+  enum class Backend { Auto, Klu, Umfpack, Amg };
   /// Auto's threshold: KLU's estimated factorization flops per unknown
   /// from which UMFPACK factors faster (docs/performance.md §11).
   static constexpr double kUmfpackFlops = 3e4;
+  /// Auto's threshold for AMG-preconditioned GMRES, on a matrix it applies
+  /// to (no constraint rows, Amg::applies): from this estimate of KLU's
+  /// flops per unknown on, the multigrid's work per unknown, which does not
+  /// grow with the fill, is the smaller (docs/performance.md §13).
+  static constexpr double kAmgFlops = 1e4;
 
   struct Counters {
     long analyses = 0;                // symbolic analyses (a new pattern)
     long factorizations = 0;          // numeric factorizations with pivoting
     long refactorizations = 0;        // numeric refactorizations on the kept pivot order
     long umfpack_factorizations = 0;  // of the factorizations, by UMFPACK
+    long amg_setups = 0;              // AMG hierarchies built
+    long krylov_iterations = 0;       // GMRES iterations over all solves
+    long krylov_solves = 0;           // GMRES solves
+    long amg_fallbacks = 0;           // solves GMRES did not finish: factored by UMFPACK
   };
 
   KluSolver(SUNContext ctx, Ordering ordering, Pivoting pivoting, Backend backend = Backend::Klu,
@@ -103,12 +116,18 @@ class KluSolver {
   static void keep_loaded(SUNMatrix a);
 
   const Counters& counters() const;
-  /// The backend the last analysis chose (Klu or Umfpack; Auto before any).
+  /// The backend the last analysis chose (Klu, Umfpack or Amg; Auto before any).
   Backend backend_in_use() const;
 
  private:
   struct Impl;
   std::unique_ptr<Impl> impl_;
 };
+
+/// The names a scene and the Python module give the backends ("auto",
+/// "klu", "umfpack", "amg"), and back.
+const std::vector<std::string>& linear_solver_names();
+std::string linear_solver_name(KluSolver::Backend backend);
+std::optional<KluSolver::Backend> linear_solver_from_name(const std::string& name);
 
 }  // namespace emdae

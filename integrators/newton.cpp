@@ -24,9 +24,14 @@ using sundials::check_ptr;
 constexpr double kRoundOffStep = 1e-15;
 
 KluSolver::Counters sum(const KluSolver::Counters& a, const KluSolver::Counters& b) {
-  return {a.analyses + b.analyses, a.factorizations + b.factorizations,
+  return {a.analyses + b.analyses,
+          a.factorizations + b.factorizations,
           a.refactorizations + b.refactorizations,
-          a.umfpack_factorizations + b.umfpack_factorizations};
+          a.umfpack_factorizations + b.umfpack_factorizations,
+          a.amg_setups + b.amg_setups,
+          a.krylov_iterations + b.krylov_iterations,
+          a.krylov_solves + b.krylov_solves,
+          a.amg_fallbacks + b.amg_fallbacks};
 }
 
 }  // namespace

@@ -658,21 +658,17 @@ void bind_settings(py::module_& m) {
       .def_readwrite("jacobian_reuse", &NewtonSettings::jacobian_reuse)
       .def_property(
           "linear_solver",
-          [](const NewtonSettings& n) {
-            return std::string(n.linear_solver == KluSolver::Backend::Klu       ? "klu"
-                               : n.linear_solver == KluSolver::Backend::Umfpack ? "umfpack"
-                                                                                : "auto");
-          },
+          [](const NewtonSettings& n) { return linear_solver_name(n.linear_solver); },
           [](NewtonSettings& n, const std::string& w) {
-            if (w == "klu")
-              n.linear_solver = KluSolver::Backend::Klu;
-            else if (w == "umfpack")
-              n.linear_solver = KluSolver::Backend::Umfpack;
-            else if (w == "auto")
-              n.linear_solver = KluSolver::Backend::Auto;
-            else
+            const auto backend = linear_solver_from_name(w);
+            if (!backend) {
+              std::string known;
+              for (const auto& name : linear_solver_names())
+                known += (known.empty() ? "\"" : ", \"") + name + "\"";
               throw InputError("schemes.newton.linear_solver: unknown linear solver \"" + w +
-                               "\" (known: \"auto\", \"klu\", \"umfpack\")");
+                               "\" (known: " + known + ")");
+            }
+            n.linear_solver = *backend;
           });
   py::class_<ContactSettings>(m, "ContactSettings")
       .def(py::init<>())

@@ -158,14 +158,12 @@ void Builder::parse_scheme(const Fields& f) {
   ss.newton.line_search = f.boolean("line_search", false);
   ss.newton.jacobian_reuse = static_cast<int>(f.integer_in("jacobian_reuse", 1, 1, 100));
   if (const auto solver = f.optional_string("linear_solver")) {
-    const std::vector<std::string> known = {"auto", "klu", "umfpack"};
-    if (std::find(known.begin(), known.end(), *solver) == known.end())
+    const auto backend = linear_solver_from_name(*solver);
+    if (!backend)
       f.fail_key("linear_solver", "unknown linear solver, received " +
                                       show(*f.find("linear_solver")) +
-                                      hint(*solver, known, "known linear solvers"));
-    ss.newton.linear_solver = *solver == "klu"       ? KluSolver::Backend::Klu
-                              : *solver == "umfpack" ? KluSolver::Backend::Umfpack
-                                                     : KluSolver::Backend::Auto;
+                                      hint(*solver, linear_solver_names(), "known linear solvers"));
+    ss.newton.linear_solver = *backend;
   }
 }
 
