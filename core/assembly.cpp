@@ -134,10 +134,11 @@ void Assembler::add_mass(Triplets& out, double factor, long offset) const {
 namespace {
 
 // The slot of (row, col) in a compressed matrix with sorted inner indices.
-long slot_of(const SparseMatrix& m, long row, long col) {
-  const long* inner = m.innerIndexPtr();
-  const long* begin = inner + m.outerIndexPtr()[col];
-  const long* end = inner + m.outerIndexPtr()[col + 1];
+long slot_of(const std::vector<long>& outer, const std::vector<long>& inner_indices, long row,
+             long col) {
+  const long* inner = inner_indices.data();
+  const long* begin = inner + outer[static_cast<std::size_t>(col)];
+  const long* end = inner + outer[static_cast<std::size_t>(col) + 1];
   const long* it = std::lower_bound(begin, end, row);
   if (it == end || *it != row) throw std::logic_error("JacobianPattern: entry not in the pattern");
   return it - inner;
@@ -145,50 +146,125 @@ long slot_of(const SparseMatrix& m, long row, long col) {
 
 }  // namespace
 
-bool JacobianPattern::prepare(const Triplets& t, const System& s, long size, SparseMatrix& j) {
-  bool same = size == size_ && t.size() == rows_.size();
+// The pattern, column by column: the rows of every potential term's block
+// (free rows) and of the triplets, and with_mass_ M's free rows, sorted and
+// merged. Built straight into compressed columns: a triplet list of the
+// same entries (with their duplicates: four elements share a node) would
+// take 24 bytes an entry and setFromTriplets another copy, about 1.5 kB per
+// dof at its peak, where this takes 8 bytes a listed row.
+void JacobianPattern::build_pattern(const System& s, long size) {
+  const auto& fixed = s.is_prescribed();
+  const SparseMatrix& m = s.mass();
+  std::vector<long> start(static_cast<std::size_t>(size) + 1, 0);
+  for (const auto& term : s.potentials()) {
+    long free_rows = 0;
+    for (int r : term->dofs()) free_rows += fixed[static_cast<std::size_t>(r)] ? 0 : 1;
+    for (int c : term->dofs()) start[static_cast<std::size_t>(c) + 1] += free_rows;
+  }
+  for (long c : cols_) ++start[static_cast<std::size_t>(c) + 1];
+  if (with_mass_)
+    for (long c = 0; c < m.outerSize(); ++c)
+      start[static_cast<std::size_t>(c) + 1] += m.outerIndexPtr()[c + 1] - m.outerIndexPtr()[c];
+  for (long c = 0; c < size; ++c)
+    start[static_cast<std::size_t>(c) + 1] += start[static_cast<std::size_t>(c)];
+  std::vector<long> listed(static_cast<std::size_t>(start.back()));
+  std::vector<long> next(start.begin(), start.end() - 1);
+  for (const auto& term : s.potentials())
+    for (int c : term->dofs())
+      for (int r : term->dofs())
+        if (!fixed[static_cast<std::size_t>(r)])
+          listed[static_cast<std::size_t>(next[static_cast<std::size_t>(c)]++)] = r;
+  for (std::size_t k = 0; k < cols_.size(); ++k)
+    listed[static_cast<std::size_t>(next[static_cast<std::size_t>(cols_[k])]++)] = rows_[k];
+  if (with_mass_)
+    for (long c = 0; c < m.outerSize(); ++c)
+      for (SparseMatrix::InnerIterator it(m, c); it; ++it)
+        if (!fixed[static_cast<std::size_t>(it.row())])
+          listed[static_cast<std::size_t>(next[static_cast<std::size_t>(c)]++)] = it.row();
+  // Sort and merge each column in place, then compress.
+  long nnz = 0;
+  for (long c = 0; c < size; ++c) {
+    auto* begin = listed.data() + start[static_cast<std::size_t>(c)];
+    auto* end = listed.data() + next[static_cast<std::size_t>(c)];
+    std::sort(begin, end);
+    end = std::unique(begin, end);
+    next[static_cast<std::size_t>(c)] = end - listed.data();
+    nnz += end - begin;
+  }
+  outer_.assign(static_cast<std::size_t>(size) + 1, 0);
+  inner_.resize(static_cast<std::size_t>(nnz));
+  for (long c = 0; c < size; ++c) {
+    const long* begin = listed.data() + start[static_cast<std::size_t>(c)];
+    const long* end = listed.data() + next[static_cast<std::size_t>(c)];
+    std::copy(begin, end, inner_.begin() + outer_[static_cast<std::size_t>(c)]);
+    outer_[static_cast<std::size_t>(c) + 1] = outer_[static_cast<std::size_t>(c)] + (end - begin);
+  }
+}
+
+bool JacobianPattern::prepare(const Triplets& t, const System& s, long size, SparseMatrix& j,
+                              bool with_mass) {
+  bool same = size == size_ && with_mass == with_mass_ && t.size() == rows_.size();
   for (std::size_t k = 0; same && k < t.size(); ++k)
     same = t[k].row() == rows_[k] && t[k].col() == cols_[k];
   if (!same) {
     ++rebuilds_;
     size_ = size;
+    with_mass_ = with_mass;
     rows_.resize(t.size());
     cols_.resize(t.size());
-    Triplets all;
-    all.reserve(t.size());
     for (std::size_t k = 0; k < t.size(); ++k) {
       rows_[k] = t[k].row();
       cols_[k] = t[k].col();
-      all.emplace_back(rows_[k], cols_[k], 0.0);
     }
-    const auto& fixed = s.is_prescribed();
-    for (const auto& term : s.potentials())
-      for (int c : term->dofs())
-        for (int r : term->dofs())
-          if (!fixed[static_cast<std::size_t>(r)]) all.emplace_back(r, c, 0.0);
-    pattern_.resize(size, size);
-    pattern_.setFromTriplets(all.begin(), all.end());
-    pattern_.makeCompressed();
+    build_pattern(s, size);
     slots_.resize(t.size());
-    for (std::size_t k = 0; k < t.size(); ++k) slots_[k] = slot_of(pattern_, rows_[k], cols_[k]);
+    for (std::size_t k = 0; k < t.size(); ++k)
+      slots_[k] = slot_of(outer_, inner_, rows_[k], cols_[k]);
+    const auto& fixed = s.is_prescribed();
     potential_slots_.clear();
+    std::size_t listed = 0;
+    for (const auto& term : s.potentials()) listed += term->dofs().size() * term->dofs().size();
+    potential_slots_.reserve(listed);
     for (const auto& term : s.potentials())
       for (int c : term->dofs())
         for (int r : term->dofs())
-          potential_slots_.push_back(fixed[static_cast<std::size_t>(r)] ? -1
-                                                                        : slot_of(pattern_, r, c));
+          potential_slots_.push_back(
+              fixed[static_cast<std::size_t>(r)] ? -1 : slot_of(outer_, inner_, r, c));
+    mass_slots_.clear();
+    if (with_mass_) {
+      const SparseMatrix& m = s.mass();
+      mass_slots_.reserve(static_cast<std::size_t>(m.nonZeros()));
+      for (long c = 0; c < m.outerSize(); ++c)
+        for (SparseMatrix::InnerIterator it(m, c); it; ++it)
+          mass_slots_.push_back(fixed[static_cast<std::size_t>(it.row())]
+                                    ? -1
+                                    : slot_of(outer_, inner_, it.row(), c));
+    }
   }
   // j may have been handed another matrix since (or be new): give it the
   // pattern unless it has it already.
-  const long nnz = pattern_.nonZeros();
-  const bool has =
-      j.rows() == size && j.cols() == size && j.isCompressed() && j.nonZeros() == nnz &&
-      std::equal(pattern_.outerIndexPtr(), pattern_.outerIndexPtr() + size + 1,
-                 j.outerIndexPtr()) &&
-      std::equal(pattern_.innerIndexPtr(), pattern_.innerIndexPtr() + nnz, j.innerIndexPtr());
-  if (!has) j = pattern_;
+  const long nnz = static_cast<long>(inner_.size());
+  const bool has = j.rows() == size && j.cols() == size && j.isCompressed() &&
+                   j.nonZeros() == nnz &&
+                   std::equal(outer_.begin(), outer_.end(), j.outerIndexPtr()) &&
+                   std::equal(inner_.begin(), inner_.end(), j.innerIndexPtr());
+  if (!has) {
+    j = SparseMatrix(size, size);
+    j.resizeNonZeros(nnz);
+    std::copy(outer_.begin(), outer_.end(), j.outerIndexPtr());
+    std::copy(inner_.begin(), inner_.end(), j.innerIndexPtr());
+  }
   std::fill(j.valuePtr(), j.valuePtr() + nnz, 0.0);
   return !same;
+}
+
+void JacobianPattern::scatter_mass(const System& s, double factor, SparseMatrix& j) const {
+  const SparseMatrix& m = s.mass();
+  double* values = j.valuePtr();
+  std::size_t k = 0;
+  for (long c = 0; c < m.outerSize(); ++c)
+    for (SparseMatrix::InnerIterator it(m, c); it; ++it, ++k)
+      if (mass_slots_[k] >= 0) values[mass_slots_[k]] += factor * it.value();
 }
 
 void JacobianPattern::scatter(const Triplets& t, SparseMatrix& j) const {

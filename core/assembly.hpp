@@ -89,21 +89,29 @@ class Assembler {
 class JacobianPattern {
  public:
   /// Makes `j` (size x size) the pattern of `t` plus the potential blocks of
-  /// `s`, all values zero; rebuilds the slots when t's sequence or the size
-  /// changed (returns true then).
-  bool prepare(const Triplets& t, const System& s, long size, SparseMatrix& j);
+  /// `s` (and, with `with_mass`, the mass matrix's entries in free rows), all
+  /// values zero; rebuilds the slots when t's sequence, the size or
+  /// `with_mass` changed (returns true then).
+  bool prepare(const Triplets& t, const System& s, long size, SparseMatrix& j,
+               bool with_mass = false);
   /// Adds the triplets' values at their slots (`t` as given to prepare).
   void scatter(const Triplets& t, SparseMatrix& j) const;
+  /// Adds factor * M (free rows) at its slots, in the order Assembler::
+  /// add_mass lists it (after prepare with `with_mass`).
+  void scatter_mass(const System& s, double factor, SparseMatrix& j) const;
   /// Per potential term (system order) n_local^2 slots, column-major
   /// (c * n_local + r); -1 for prescribed rows.
   const std::vector<long>& potential_slots() const { return potential_slots_; }
   long rebuilds() const { return rebuilds_; }
 
  private:
+  void build_pattern(const System& s, long size);
+
   long size_ = -1;
+  bool with_mass_ = false;
   std::vector<long> rows_, cols_;  // the triplet sequence the slots are for
-  std::vector<long> slots_, potential_slots_;
-  SparseMatrix pattern_;
+  std::vector<long> slots_, potential_slots_, mass_slots_;
+  std::vector<long> outer_, inner_;  // the pattern, compressed columns
   long rebuilds_ = 0;
 };
 

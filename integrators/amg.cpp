@@ -163,7 +163,7 @@ struct Amg::Impl {
   struct Level {
     RowMatrix a;
     Vector inv_d;
-    RowMatrix p, r;  // to the next level
+    RowMatrix p;  // to the next level (R = P^T)
     mutable Vector x, b, res;
   };
   std::vector<Level> levels;
@@ -209,7 +209,7 @@ struct Amg::Impl {
     forward_gs(lev);
     lev.res.noalias() = lev.b - lev.a * lev.x;
     const Level& next = levels[l + 1];
-    next.b.noalias() = lev.r * lev.res;
+    next.b.noalias() = lev.p.transpose() * lev.res;
     cycle(l + 1);
     lev.x.noalias() += lev.p * next.x;
     backward_gs(lev);
@@ -272,12 +272,17 @@ bool Amg::build(long n, const long* ap, const long* ai, const double* ax) {
       tentative.valuePtr()[i] = 1.0 / std::sqrt(double(members[a]));
     }
     const double omega = 4.0 / 3.0 / spectral_radius(lev.a, lev.inv_d);
-    RowMatrix ap_t = lev.a * tentative;
-    const Vector scale = omega * lev.inv_d;
-    lev.p = tentative - RowMatrix(scale.asDiagonal() * ap_t);
-    lev.r = lev.p.transpose();
-    RowMatrix a_p = lev.a * lev.p;
-    RowMatrix coarse_a = lev.r * a_p;
+    {
+      const RowMatrix ap_t = lev.a * tentative;
+      const Vector scale = omega * lev.inv_d;
+      lev.p = tentative - RowMatrix(scale.asDiagonal() * ap_t);
+    }
+    tentative = RowMatrix();
+    RowMatrix coarse_a;
+    {
+      const RowMatrix a_p = lev.a * lev.p;
+      coarse_a = RowMatrix(lev.p.transpose()) * a_p;
+    }
     coarse_a.prune(0.0);
     Impl::Level next;
     next.a = std::move(coarse_a);

@@ -63,7 +63,9 @@ struct KluSolver::Impl {
   double rcond_fresh = 0.0;
   long last_flag = SUNLS_SUCCESS;
   Counters counters;
-  std::vector<long> outer, inner;  // the pattern analysed last
+  // The pattern loaded last, copied for a matrix that is not kept
+  // (keep_loaded); a kept matrix's own index arrays hold it.
+  std::vector<long> outer, inner;
   const double* values = nullptr;  // the matrix's values (UMFPACK's solve reads them)
   std::vector<double> rhs;         // UMFPACK's right-hand side
   SUNMatrix loaded = nullptr;      // the matrix load() filled last
@@ -71,8 +73,8 @@ struct KluSolver::Impl {
   Amg amg;
   std::vector<double> krylov_work;
   long n_in_use = 0;
-  const long* amg_ap = nullptr;  // the current matrix, for the Krylov products
-  const long* amg_ai = nullptr;
+  const long* ap_in_use = nullptr;  // the matrix of the last set-up (its values: `values`)
+  const long* ai_in_use = nullptr;
   int iterations_after_build = -1;  // of the first solve after the last build
   int last_iterations = 0;
   bool rebuild = true;
@@ -151,8 +153,8 @@ struct KluSolver::Impl {
     double* ax = SUNSparseMatrix_Data(a);
     values = ax;
     const long n = SUNSparseMatrix_Columns(a);
-    amg_ap = ap;
-    amg_ai = ai;
+    ap_in_use = ap;
+    ai_in_use = ai;
     n_in_use = n;
     if (pattern_changed || !(analysed() || amg.built())) {
       free_numeric();
@@ -225,9 +227,9 @@ struct KluSolver::Impl {
     std::vector<double> rhs_copy(bp, bp + n);  // x and b may be the same vector
     double* xp = N_VGetArrayPointer(x);
     for (int attempt = 0; attempt < 2; ++attempt) {
-      if (attempt == 1 && amg_build(amg_ap, amg_ai, values) != SUNLS_SUCCESS) break;
+      if (attempt == 1 && amg_build(ap_in_use, ai_in_use, values) != SUNLS_SUCCESS) break;
       const GmresResult r =
-          gmres(n, amg_ap, amg_ai, values, amg, rhs_copy.data(), xp, kKrylovTolerance,
+          gmres(n, ap_in_use, ai_in_use, values, amg, rhs_copy.data(), xp, kKrylovTolerance,
                 kKrylovRestart, kKrylovMaxIterations, krylov_work);
       ++counters.krylov_solves;
       counters.krylov_iterations += r.iterations;
@@ -237,8 +239,8 @@ struct KluSolver::Impl {
     }
     ++counters.amg_fallbacks;
     rebuild = true;
-    long* ap = const_cast<long*>(amg_ap);
-    long* ai = const_cast<long*>(amg_ai);
+    long* ap = const_cast<long*>(ap_in_use);
+    long* ai = const_cast<long*>(ai_in_use);
     double* ax = const_cast<double*>(values);
     void* sym = nullptr;
     void* num = nullptr;
@@ -260,7 +262,7 @@ struct KluSolver::Impl {
       // UMFPACK solves out of place; x and b may be the same vector.
       rhs.assign(N_VGetArrayPointer(b), N_VGetArrayPointer(b) + N_VGetLength(b));
       const long status =
-          umfpack_dl_solve(UMFPACK_A, outer.data(), inner.data(), values, N_VGetArrayPointer(x),
+          umfpack_dl_solve(UMFPACK_A, ap_in_use, ai_in_use, values, N_VGetArrayPointer(x),
                            rhs.data(), umf_numeric, umf_control, umf_info);
       return status == UMFPACK_OK ? SUNLS_SUCCESS : SUNLS_PACKAGE_FAIL_REC;
     }
@@ -349,19 +351,31 @@ void KluSolver::load(const SparseMatrix& jac, SUNMatrix a) {
                            std::to_string(n) + " Jacobian for a SUNMatrix of another size");
   const long* op = jac.outerIndexPtr();
   const long* ip = jac.innerIndexPtr();
-  const bool same =
-      static_cast<long>(m.outer.size()) == n + 1 && static_cast<long>(m.inner.size()) == nnz &&
-      std::equal(op, op + n + 1, m.outer.begin()) && std::equal(ip, ip + nnz, m.inner.begin());
+  // A kept matrix (keep_loaded) still holds the pattern of the last load:
+  // nothing has zeroed its indices since.
+  const bool keeps = a->ops->zero == &keep_zero;
+  const bool kept = keeps && m.loaded == a;
+  bool same = false;
+  if (kept) {
+    const long* last_op = SUNSparseMatrix_IndexPointers(a);
+    same = last_op[n] == nnz && std::equal(op, op + n + 1, last_op) &&
+           std::equal(ip, ip + nnz, SUNSparseMatrix_IndexValues(a));
+  } else {
+    same = static_cast<long>(m.outer.size()) == n + 1 && static_cast<long>(m.inner.size()) == nnz &&
+           std::equal(op, op + n + 1, m.outer.begin()) && std::equal(ip, ip + nnz, m.inner.begin());
+  }
   if (!same) {
     if (SUNSparseMatrix_NNZ(a) < nnz && SUNSparseMatrix_Reallocate(a, nnz) != SUNMAT_SUCCESS)
       throw std::runtime_error("SUNSparseMatrix_Reallocate failed");
-    m.outer.assign(op, op + n + 1);
-    m.inner.assign(ip, ip + nnz);
+    if (keeps) {
+      std::vector<long>().swap(m.outer);
+      std::vector<long>().swap(m.inner);
+    } else {
+      m.outer.assign(op, op + n + 1);
+      m.inner.assign(ip, ip + nnz);
+    }
     m.pattern_changed = true;
   }
-  // A kept matrix (keep_loaded) still holds the pattern of the last load:
-  // nothing has zeroed its indices since.
-  const bool kept = a->ops->zero == &keep_zero && m.loaded == a;
   if (!same || !kept) {
     std::copy(op, op + n + 1, SUNSparseMatrix_IndexPointers(a));
     std::copy(ip, ip + nnz, SUNSparseMatrix_IndexValues(a));

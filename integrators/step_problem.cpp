@@ -208,7 +208,9 @@ void StepProblem::jacobian(const Vec& x, SparseMatrix& j) {
   const Vec q1 = x.head(n_);
   const Vec lambda = kappa_ * x.tail(m_);
   trip_.clear();
-  assembler_.add_mass(trip_, 2.0 / (dt_ * dt_));
+  // The mass goes through its own slots (JacobianPattern::scatter_mass)
+  // outside massless mode: as triplets it was most of the list, 18 a dof.
+  if (massless_mode()) assembler_.add_mass(trip_, 2.0 / (dt_ * dt_));
   force_.setZero(n_);
   // Outside massless mode the potentials' Jacobians (the element blocks, most
   // of the matrix) go straight into the compressed values at the end; the
@@ -249,7 +251,8 @@ void StepProblem::jacobian(const Vec& x, SparseMatrix& j) {
     j.setFromTriplets(trip_.begin(), trip_.end());
     return;
   }
-  pattern_->prepare(trip_, s_, size(), j);
+  pattern_->prepare(trip_, s_, size(), j, true);
+  pattern_->scatter_mass(s_, 2.0 / (dt_ * dt_), j);
   pattern_->scatter(trip_, j);
   assembler_.add_potential_jacobian(kind_, q0_, q1, t0_, t1_, j.valuePtr(),
                                     pattern_->potential_slots());

@@ -657,12 +657,13 @@ TEST(Assembly, SlotMapJacobianEqualsTriplets) {
     q1[i] += 0.05 * u(rng);
   }
   Assembler assembler(s);
-  JacobianPattern pattern;
+  JacobianPattern pattern, mass_pattern;
   SparseMatrix j;
   for (GradientKind kind : {GradientKind::Exact, GradientKind::Midpoint, GradientKind::Discrete})
     for (bool extra : {false, true, true}) {
       Triplets t;
       assembler.add_mass(t, 3.0);
+      const long mass_entries = static_cast<long>(t.size());
       if (extra) t.emplace_back(n - 1, 1, 0.25);  // an entry outside the elements' pattern
       Triplets all = t;
       Vec f = Vec::Zero(n);
@@ -672,9 +673,23 @@ TEST(Assembly, SlotMapJacobianEqualsTriplets) {
 
       pattern.prepare(t, s, n, j);
       pattern.scatter(t, j);
+      // The same with the mass through its own slots.
+      SparseMatrix j_mass;
+      Triplets rest(t.begin() + mass_entries, t.end());
+      mass_pattern.prepare(rest, s, n, j_mass, true);
+      mass_pattern.scatter_mass(s, 3.0, j_mass);
+      mass_pattern.scatter(rest, j_mass);
       assembler.add_potential_jacobian(kind, q0, q1, 0.0, 1.0, j.valuePtr(),
                                        pattern.potential_slots(), 0.5);
+      assembler.add_potential_jacobian(kind, q0, q1, 0.0, 1.0, j_mass.valuePtr(),
+                                       mass_pattern.potential_slots(), 0.5);
       ASSERT_EQ(j.nonZeros(), reference.nonZeros());
+      // Bit for bit: the mass first, then the triplets, then the elements,
+      // as the triplet path adds them.
+      ASSERT_EQ(j_mass.nonZeros(), j.nonZeros());
+      EXPECT_TRUE(
+          std::equal(j.innerIndexPtr(), j.innerIndexPtr() + j.nonZeros(), j_mass.innerIndexPtr()));
+      EXPECT_TRUE(std::equal(j.valuePtr(), j.valuePtr() + j.nonZeros(), j_mass.valuePtr()));
       const Mat d = Mat(j) - Mat(reference);
       EXPECT_LE(d.cwiseAbs().maxCoeff(), 1e-13 * Mat(reference).cwiseAbs().maxCoeff())
           << static_cast<int>(kind) << " " << extra;
@@ -683,6 +698,7 @@ TEST(Assembly, SlotMapJacobianEqualsTriplets) {
     }
   // Three kinds x (plain, extra, extra): the sequence changes 6 times.
   EXPECT_EQ(pattern.rebuilds(), 6);
+  EXPECT_EQ(mass_pattern.rebuilds(), 6);
 }
 
 // --- mass ----------------------------------------------------------------------

@@ -37,12 +37,6 @@ SnapshotRecorder::SnapshotRecorder(std::vector<VtuBody> bodies,
   double per_frame = 0.0;
   for (std::size_t b = 0; b < bodies_.size(); ++b) {
     const Mesh& mesh = bodies_[b].mesh;
-    std::vector<std::unique_ptr<Q1Element>> elements;
-    elements.reserve(mesh.quads.size());
-    for (int e = 0; e < mesh.n_elements(); ++e)
-      elements.push_back(std::make_unique<Q1Element>(std::vector<int>{0, 1, 2, 3, 4, 5, 6, 7},
-                                                     mesh.quad_nodes(e), bodies_[b].material, e));
-    elements_.push_back(std::move(elements));
     DrawnBody drawn{bodies_[b].name, mesh.quads, {}};
     if (b < slave_edges.size()) drawn.slave_edges = slave_edges[b];
     data_.bodies.push_back(std::move(drawn));
@@ -83,7 +77,11 @@ BodyFrame SnapshotRecorder::capture(const State& state, long step, int active_co
         local[2 * a] = x[2 * body.mesh.quads[e][a]];
         local[2 * a + 1] = x[2 * body.mesh.quads[e][a] + 1];
       }
-      stress[e] = equivalent_stress(*elements_[b][e], local);
+      // Made per frame, not kept: frames are few, and a kept copy of every
+      // element was about 0.2 kB per dof of a large mesh for the whole run.
+      const Q1Element element({0, 1, 2, 3, 4, 5, 6, 7}, body.mesh.quad_nodes(static_cast<int>(e)),
+                              body.material, static_cast<int>(e));
+      stress[e] = equivalent_stress(element, local);
     }
     std::vector<std::pair<int, double>> p;
     for (const auto& [node, value] : pressures)

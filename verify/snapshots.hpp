@@ -103,7 +103,6 @@ class SnapshotRecorder {
   BodyFrame capture(const State& state, long step, int active_contacts) const;
 
   std::vector<VtuBody> bodies_;
-  std::vector<std::vector<std::unique_ptr<Q1Element>>> elements_;
   Pressures pressures_;
   BodySnapshots data_;
   int frames_ = 0;
