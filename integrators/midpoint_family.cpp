@@ -51,24 +51,39 @@ MidpointFamilyStepper::MidpointFamilyStepper(const System& system, GradientKind 
     index[static_cast<std::size_t>(i)] = static_cast<int>(free_.size());
     free_.push_back(i);
   }
-  Triplets ff, fp;
+  // M_ff straight from M's compressed columns (index is increasing, so
+  // the rows stay sorted), and M_fp on the prescribed columns only (the
+  // velocity update multiplies it by a vector that is zero elsewhere).
   const SparseMatrix& m = system_.mass();
-  for (int col = 0; col < m.outerSize(); ++col)
-    for (SparseMatrix::InnerIterator it(m, col); it; ++it) {
-      const int r = index[static_cast<std::size_t>(it.row())];
-      if (r < 0) continue;
-      fp.emplace_back(r, col, it.value());
-      const int c = index[static_cast<std::size_t>(col)];
-      if (c >= 0) ff.emplace_back(r, c, it.value());
-    }
   const long nf = static_cast<long>(free_.size());
   SparseMatrix mff(nf, nf);
-  mff.setFromTriplets(ff.begin(), ff.end());
+  {
+    long nnz = 0;
+    for (int col : free_)
+      for (SparseMatrix::InnerIterator it(m, col); it; ++it)
+        nnz += index[static_cast<std::size_t>(it.row())] >= 0 ? 1 : 0;
+    mff.resizeNonZeros(nnz);
+    long k = 0;
+    for (long c = 0; c < nf; ++c) {
+      mff.outerIndexPtr()[c] = k;
+      for (SparseMatrix::InnerIterator it(m, free_[static_cast<std::size_t>(c)]); it; ++it) {
+        const int r = index[static_cast<std::size_t>(it.row())];
+        if (r < 0) continue;
+        mff.innerIndexPtr()[k] = r;
+        mff.valuePtr()[k++] = it.value();
+      }
+    }
+    mff.outerIndexPtr()[nf] = k;
+  }
+  Triplets fp;
+  for (const auto& p : system_.prescribed())
+    for (SparseMatrix::InnerIterator it(m, p.dof); it; ++it) {
+      const int r = index[static_cast<std::size_t>(it.row())];
+      if (r >= 0) fp.emplace_back(r, p.dof, it.value());
+    }
   m_fp_.resize(nf, n);
   m_fp_.setFromTriplets(fp.begin(), fp.end());
-  m_ff_.compute(mff);
-  if (m_ff_.info() != Eigen::Success)
-    throw std::invalid_argument("mass matrix on the free dofs is not positive definite");
+  m_ff_.compute(std::move(mff), scheme_.iterative_mass_from);
 }
 
 std::vector<const Term*> MidpointFamilyStepper::active_terms(const std::vector<int>& active) const {

@@ -44,11 +44,10 @@
 // energy balance).
 #pragma once
 
-#include <Eigen/SparseCholesky>
-
 #include "core/assembly.hpp"
 #include "core/gradient.hpp"
 #include "integrators/contact_step.hpp"
+#include "integrators/mass_inverse.hpp"
 #include "integrators/stepper.hpp"
 
 namespace emdae {
@@ -62,6 +61,7 @@ class MidpointFamilyStepper : public Stepper, public SubstepScheme {
 
   KluSolver::Counters klu_counters() const { return newton_.klu_counters(); }
   const ImpactCounters& impact_counters() const { return contact_.counters(); }
+  const MassInverse& mass_inverse() const { return m_ff_; }
 
   StepStats solve_substep(State& s, double h, const Vec& targets, const SolveGuess* guess) override;
   Vec inverse_mass(const Vec& f) const override;
@@ -84,9 +84,9 @@ class MidpointFamilyStepper : public Stepper, public SubstepScheme {
   Vec external_impulse_, external_angular_impulse_;  // of the last solve
   std::vector<int> free_;                            // free dofs with mass, in order
   std::vector<int> massless_;                        // free dofs without mass
-  SparseMatrix m_fp_;                                // M restricted to free rows, all columns
-  Eigen::SimplicialLDLT<SparseMatrix> m_ff_;         // factor of M on the free dofs
-  TermWorkspace work_ws_;                            // for driven_work
+  SparseMatrix m_fp_;      // M restricted to free rows and prescribed columns
+  MassInverse m_ff_;       // M^-1 on the free dofs
+  TermWorkspace work_ws_;  // for driven_work
 };
 
 }  // namespace emdae

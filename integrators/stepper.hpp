@@ -106,6 +106,9 @@ struct MidpointFamilySettings : ContactSettings {
   // Scale residuals by the Newton matrix's diagonal (statics) instead of the
   // inertial dt^2 / (2 m_i) (dynamics); see midpoint_family.hpp.
   bool stiffness_scaled_residual = false;
+  // From this many free dofs with mass on, M^-1 by conjugate gradients
+  // instead of a sparse LDLT (integrators/mass_inverse.hpp).
+  long iterative_mass_from = 100000;
 };
 
 }  // namespace emdae
