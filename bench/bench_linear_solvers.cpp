@@ -1,5 +1,6 @@
-// The Newton solve's sparse LU at scale: KLU against UMFPACK, both through
-// the project's solver (integrators/klu_solver.hpp) as em uses it.
+// The Newton solve's linear solver at scale: KLU, UMFPACK and AMG-
+// preconditioned GMRES, all through the project's solver
+// (integrators/klu_solver.hpp) as em uses it.
 //
 // The matrix is em's iteration matrix of a square Q1 SVK block, nx x nx
 // elements (2 M / dt^2 + the discrete gradient's Jacobian), from 10^3 to
@@ -7,12 +8,14 @@
 // time of
 //   first   the first set-up: symbolic analysis + factorization;
 //   next    a later set-up on the same pattern, values changed: KLU
-//           refactors on its kept pivot order, UMFPACK factors afresh;
-//   solve   one solve;
+//           refactors on its kept pivot order, UMFPACK factors afresh,
+//           AMG keeps its hierarchy (0: it builds one when GMRES slows);
+//   solve   one solve (AMG: GMRES on the changed matrix, preconditioned by
+//           the first one's hierarchy; its iterations on the next line);
 // and the relative residual |A x - b| / |b| of that solve, with KLU's own
 // estimate, from its symbolic analysis alone, of the factor's entries per
 // unknown ((lnz + unz) / n) and flops per unknown. This is what
-// Backend::Auto's rule (KluSolver::kUmfpackFrom, kUmfpackFill) was chosen
+// Backend::Auto's rules (KluSolver::kUmfpackFlops, kAmgFlops) were chosen
 // from.
 //
 //   bench_linear_solvers [MESH ...]   (default 16 50 100 160 224 316)
