@@ -170,30 +170,20 @@ struct Amg::Impl {
   std::unique_ptr<Eigen::SparseLU<ColMatrix>> coarse;
   bool ready = false;
 
-  void forward_gs(const Level& l) const {
+  // One Gauss-Seidel sweep on x_l for A_l x = b_l, rows first to last
+  // (forward) or last to first.
+  static void gauss_seidel(const Level& l, bool forward) {
     const RowMatrix& a = l.a;
     const int* outer = a.outerIndexPtr();
     const int* inner = a.innerIndexPtr();
     const double* v = a.valuePtr();
     double* x = l.x.data();
     const double* b = l.b.data();
-    for (int i = 0; i < a.rows(); ++i) {
+    const int n = static_cast<int>(a.rows());
+    for (int k = 0; k < n; ++k) {
+      const int i = forward ? k : n - 1 - k;
       double s = b[i];
-      for (int k = outer[i]; k < outer[i + 1]; ++k) s -= v[k] * x[inner[k]];
-      x[i] += s * l.inv_d[i];
-    }
-  }
-
-  void backward_gs(const Level& l) const {
-    const RowMatrix& a = l.a;
-    const int* outer = a.outerIndexPtr();
-    const int* inner = a.innerIndexPtr();
-    const double* v = a.valuePtr();
-    double* x = l.x.data();
-    const double* b = l.b.data();
-    for (int i = static_cast<int>(a.rows()) - 1; i >= 0; --i) {
-      double s = b[i];
-      for (int k = outer[i]; k < outer[i + 1]; ++k) s -= v[k] * x[inner[k]];
+      for (int e = outer[i]; e < outer[i + 1]; ++e) s -= v[e] * x[inner[e]];
       x[i] += s * l.inv_d[i];
     }
   }
@@ -206,13 +196,13 @@ struct Amg::Impl {
       return;
     }
     lev.x.setZero();
-    forward_gs(lev);
+    gauss_seidel(lev, true);
     lev.res.noalias() = lev.b - lev.a * lev.x;
     const Level& next = levels[l + 1];
     next.b.noalias() = lev.p.transpose() * lev.res;
     cycle(l + 1);
     lev.x.noalias() += lev.p * next.x;
-    backward_gs(lev);
+    gauss_seidel(lev, false);
   }
 };
 

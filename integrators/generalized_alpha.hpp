@@ -64,6 +64,7 @@ class GeneralizedAlphaStepper final : public Stepper {
                           NewtonSettings newton);
   std::string name() const override { return "galpha"; }
   StepStats step(State& state, double dt) override;
+  KluSolver::Counters linear_solver_counters() const override { return newton_.klu_counters(); }
 
   const GeneralizedAlphaSettings& settings() const { return p_; }
   /// The true acceleration qdd at the state handed out last (empty before).

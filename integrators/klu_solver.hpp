@@ -52,6 +52,15 @@
 // factorization's flops and takes UMFPACK from `umfpack_flops` per unknown
 // on (measured crossover 3e4: square blocks of 5*10^4 dofs, rings of 10^5
 // at 2.5e4 still KLU's); each backend can be forced.
+//
+// Backend::Amg is not an LU: GMRES preconditioned by smoothed-aggregation
+// multigrid (integrators/amg.hpp), whose work per unknown does not grow with
+// the mesh (a Newton iteration of em as dofs^1.12 from 10^4 to 10^6, against
+// UMFPACK's dofs^1.42: docs/performance.md §13). It needs a matrix without
+// constraint rows; a pattern with one goes to KLU (or UMFPACK by the rule
+// above). Auto takes it from kAmgFlops per unknown on where it applies. The
+// hierarchy is kept while GMRES on the current matrix does not slow down,
+// and a solve GMRES cannot finish is factored by UMFPACK (counted).
 #pragma once
 
 #include <sundials/sundials_linearsolver.h>
@@ -91,6 +100,18 @@ class KluSolver {
     long krylov_iterations = 0;       // GMRES iterations over all solves
     long krylov_solves = 0;           // GMRES solves
     long amg_fallbacks = 0;           // solves GMRES did not finish: factored by UMFPACK
+
+    Counters& operator+=(const Counters& o) {
+      analyses += o.analyses;
+      factorizations += o.factorizations;
+      refactorizations += o.refactorizations;
+      umfpack_factorizations += o.umfpack_factorizations;
+      amg_setups += o.amg_setups;
+      krylov_iterations += o.krylov_iterations;
+      krylov_solves += o.krylov_solves;
+      amg_fallbacks += o.amg_fallbacks;
+      return *this;
+    }
   };
 
   KluSolver(SUNContext ctx, Ordering ordering, Pivoting pivoting, Backend backend = Backend::Klu,

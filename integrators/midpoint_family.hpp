@@ -60,6 +60,7 @@ class MidpointFamilyStepper : public Stepper, public SubstepScheme {
   bool last_resort() override { return contact_.keep_deep_entries(); }
 
   KluSolver::Counters klu_counters() const { return newton_.klu_counters(); }
+  KluSolver::Counters linear_solver_counters() const override { return klu_counters(); }
   const ImpactCounters& impact_counters() const { return contact_.counters(); }
   const MassInverse& mass_inverse() const { return m_ff_; }
 

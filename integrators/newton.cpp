@@ -23,17 +23,6 @@ using sundials::check_ptr;
 // A scaled Newton step this small is at the round-off level of O(1) unknowns.
 constexpr double kRoundOffStep = 1e-15;
 
-KluSolver::Counters sum(const KluSolver::Counters& a, const KluSolver::Counters& b) {
-  return {a.analyses + b.analyses,
-          a.factorizations + b.factorizations,
-          a.refactorizations + b.refactorizations,
-          a.umfpack_factorizations + b.umfpack_factorizations,
-          a.amg_setups + b.amg_setups,
-          a.krylov_iterations + b.krylov_iterations,
-          a.krylov_solves + b.krylov_solves,
-          a.amg_fallbacks + b.amg_fallbacks};
-}
-
 }  // namespace
 
 struct NewtonSolver::Impl {
@@ -58,7 +47,7 @@ struct NewtonSolver::Impl {
 
   void release() {
     kin.reset();
-    if (klu) before = sum(before, klu->counters());
+    if (klu) before += klu->counters();
     klu.reset();
     jmat.reset();
     for (sundials::Vector* v : {&u, &uscale, &fscale}) v->reset();
@@ -158,7 +147,9 @@ NewtonSolver& NewtonSolver::operator=(NewtonSolver&&) noexcept = default;
 
 KluSolver::Counters NewtonSolver::klu_counters() const {
   const Impl& m = *impl_;
-  return m.klu ? sum(m.before, m.klu->counters()) : m.before;
+  KluSolver::Counters c = m.before;
+  if (m.klu) c += m.klu->counters();
+  return c;
 }
 
 NewtonResult NewtonSolver::solve(NewtonProblem& problem, Vec& x, const Vec& residual_scale) {

@@ -82,6 +82,9 @@ class Stepper {
   /// entries keep their gap, ContactStepper::keep_deep_entries). False if
   /// there is none, or it was just tried.
   virtual bool last_resort() { return false; }
+  /// The linear solver's work over this stepper's life (the Newton solve's
+  /// KluSolver; zero where the stepper reports none).
+  virtual KluSolver::Counters linear_solver_counters() const { return {}; }
 };
 
 /// What em and midpoint do when a node hits (integrators/contact_step.hpp);

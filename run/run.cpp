@@ -342,6 +342,7 @@ RunResult::End integrate_model(const std::function<std::unique_ptr<Stepper>()>& 
               throw Interrupted("interrupted at t = " + fmt::format("{}", s.t));
           },
           {}, &driver);
+      info.linear_solver += stepper->linear_solver_counters();
       if (outcome.paused) {
         info.cpu_seconds = cpu_now() - cpu_start;
         checkpoint();
@@ -363,8 +364,9 @@ RunResult::End integrate_model(const std::function<std::unique_ptr<Stepper>()>& 
 
 // --- checkpoints --------------------------------------------------------------------
 
-// 2: with the trajectories' place; 3: with the driver's last-resort steps.
-constexpr const char* kCheckpointMagic = "emdae checkpoint 3";
+// 2: with the trajectories' place; 3: with the driver's last-resort steps;
+// 4: with the linear solver's counters.
+constexpr const char* kCheckpointMagic = "emdae checkpoint 4";
 
 // What a checkpoint holds besides the recorder: the loop, the state, where
 // the history and the fields are.
@@ -373,6 +375,7 @@ struct Checkpoint {
   State state;
   long history_offset = 0, history_rows = 0, last_written = 0, fields_written = -1;
   double cpu_seconds = 0.0;
+  KluSolver::Counters linear_solver;
   std::vector<std::pair<double, std::string>> fields_index;
   long trajectories_offset = -1, trajectories_written = -1;  // -1: none
   std::vector<std::pair<double, std::string>> trajectories_index;
@@ -407,6 +410,10 @@ void write_checkpoint(const std::string& dir, const std::string& identity, const
   put_ints(out, c.state.active);
   for (long x : {c.history_offset, c.history_rows, c.last_written, c.fields_written}) put(out, x);
   put(out, c.cpu_seconds);
+  const KluSolver::Counters& k = c.linear_solver;
+  for (long x : {k.analyses, k.factorizations, k.refactorizations, k.umfpack_factorizations,
+                 k.amg_setups, k.krylov_iterations, k.krylov_solves, k.amg_fallbacks})
+    put(out, x);
   put<std::uint64_t>(out, c.fields_index.size());
   for (const auto& [t, file] : c.fields_index) {
     put(out, t);
@@ -454,6 +461,10 @@ Checkpoint read_checkpoint(const std::string& dir, const std::string& identity,
     for (long* x : {&c.history_offset, &c.history_rows, &c.last_written, &c.fields_written})
       *x = get<long>(in);
     c.cpu_seconds = get<double>(in);
+    KluSolver::Counters& k = c.linear_solver;
+    for (long* x : {&k.analyses, &k.factorizations, &k.refactorizations, &k.umfpack_factorizations,
+                    &k.amg_setups, &k.krylov_iterations, &k.krylov_solves, &k.amg_fallbacks})
+      *x = get<long>(in);
     const auto n = get<std::uint64_t>(in);
     for (std::uint64_t i = 0; i < n && in; ++i) {
       const double t = get<double>(in);
@@ -645,6 +656,7 @@ RunResult run(Model& model, const RunSettings& settings, RunObserver* watcher) {
     driver = resumed->driver;
     last_written = resumed->last_written;
     info.cpu_seconds = resumed->cpu_seconds;
+    info.linear_solver = resumed->linear_solver;
     fields.restore(resumed->fields_index, resumed->fields_written);
     trajectories.restore(resumed->trajectories_written);
   } else {
@@ -665,6 +677,7 @@ RunResult run(Model& model, const RunSettings& settings, RunObserver* watcher) {
     c.trajectories_written = trajectories.points_written();
     c.trajectories_index = trajectories.index();
     c.cpu_seconds = info.cpu_seconds;
+    c.linear_solver = info.linear_solver;
     write_checkpoint(dir, identity, c, recorder);
     if (!settings.resume_note.empty())
       write_atomically((fs::path(dir) / "checkpoint" / "run.json").string(), settings.resume_note,

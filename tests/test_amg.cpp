@@ -22,6 +22,7 @@
 #include "integrators/klu_solver.hpp"
 #include "integrators/stepper.hpp"
 #include "integrators/sundials_support.hpp"
+#include "run/run.hpp"
 
 namespace emdae {
 namespace {
@@ -45,6 +46,16 @@ SparseMatrix block_matrix(int nx) {
   j.setFromTriplets(trip.begin(), trip.end());
   j.makeCompressed();
   return j;
+}
+
+// A square SVK block of side 1 and nx x nx elements (E = 100, nu = 0.3,
+// rho = 1) translating at 0.1 and spinning at 2/s.
+std::unique_ptr<Model> spinning_block(int nx) {
+  auto model = std::make_unique<Model>(2);
+  model->add_body("block", rectangle_mesh(Eigen::Vector2d::Zero(), 1.0, 1.0, nx, nx),
+                  make_material(MaterialModel::SaintVenantKirchhoff, 100.0, 0.3, 1.0),
+                  BodyOptions{false, Eigen::Vector2d(0.1, 0.0), 2.0, "block"});
+  return model;
 }
 
 struct Solved {
@@ -174,10 +185,8 @@ TEST(Amg, AutoChoosesItByTheFill) {
 // Jacobians while GMRES needs no more than 1.5x its first count), no
 // fallback to the LU.
 TEST(NewtonSolve, AmgTakesTheStepsKluTakes) {
-  Model model(2);
-  model.add_body("block", rectangle_mesh(Eigen::Vector2d::Zero(), 1.0, 1.0, 40, 40),
-                 make_material(MaterialModel::SaintVenantKirchhoff, 100.0, 0.3, 1.0),
-                 BodyOptions{false, Eigen::Vector2d(0.1, 0.0), 2.0, "block"});
+  const auto model_ptr = spinning_block(40);
+  Model& model = *model_ptr;
   const System& s = model.system();
   const double dt = 0.01;
   std::vector<State> ends;
@@ -215,6 +224,36 @@ TEST(NewtonSolve, AmgTakesTheStepsKluTakes) {
   EXPECT_LE((ends[1].v - ends[0].v).cwiseAbs().maxCoeff(), 2e-10 / dt);
 }
 
+// The run's summary says what the linear solver did: the spinning block run
+// with "amg" made one GMRES solve per Newton iteration on one hierarchy and
+// no factorization; with "klu", one factorization or refactorization per
+// Newton iteration and no GMRES.
+TEST(Amg, TheSummaryCountsTheLinearSolversWork) {
+  const auto model_ptr = spinning_block(40);
+  Model& model = *model_ptr;
+  for (const auto backend : {KluSolver::Backend::Amg, KluSolver::Backend::Klu}) {
+    RunSettings settings;
+    settings.scheme = "em";
+    settings.schemes.newton = NewtonSettings{1e-10, 25, false};
+    settings.schemes.newton.linear_solver = backend;
+    settings.time = TimeSettings{0.01, 0.05, 0.01};
+    const RunResult r = run(model, settings);
+    ASSERT_TRUE(r.finished()) << r.summary.status;
+    const KluSolver::Counters& c = r.summary.linear_solver;
+    EXPECT_EQ(c.analyses, 1);
+    EXPECT_GE(r.summary.newton_iterations, 10);  // 5 steps, 2 iterations each
+    if (backend == KluSolver::Backend::Amg) {
+      EXPECT_EQ(c.krylov_solves, r.summary.newton_iterations);
+      EXPECT_EQ(c.amg_setups, 1);
+      EXPECT_GE(c.krylov_iterations, 5 * c.krylov_solves);
+      EXPECT_EQ(c.factorizations + c.refactorizations, 0);
+    } else {
+      EXPECT_EQ(c.factorizations + c.refactorizations, r.summary.newton_iterations);
+      EXPECT_EQ(c.krylov_solves + c.amg_setups, 0);
+    }
+  }
+}
+
 // M^-1 of the velocity update by conjugate gradients (MassInverse, used
 // from MidpointFamilySettings::iterative_mass_from free dofs on) against the
 // sparse LDLT: the same spinning block, 12 steps of em, forced to CG: the
@@ -222,10 +261,8 @@ TEST(NewtonSolve, AmgTakesTheStepsKluTakes) {
 // 1e-13, and CG took at most 60 iterations per solve (a consistent Q1 mass against its diagonal: a
 // condition number of at most 9, whatever the mesh).
 TEST(MassInverse, ConjugateGradientsAsTheFactorization) {
-  Model model(2);
-  model.add_body("block", rectangle_mesh(Eigen::Vector2d::Zero(), 1.0, 1.0, 30, 30),
-                 make_material(MaterialModel::SaintVenantKirchhoff, 100.0, 0.3, 1.0),
-                 BodyOptions{false, Eigen::Vector2d(0.1, 0.0), 2.0, "block"});
+  const auto model_ptr = spinning_block(30);
+  Model& model = *model_ptr;
   const System& s = model.system();
   std::vector<State> ends;
   std::vector<std::vector<int>> iterations;

@@ -96,6 +96,7 @@ struct Summary {
   // Steps that failed at min_dt and passed with the stepper's last resort
   // (Stepper::last_resort: deep contact entries keeping their gap).
   long last_resort_steps = 0;
+  KluSolver::Counters linear_solver;  // the time loop's (RunInfo::linear_solver)
   double cpu_seconds = 0.0;
   double energy_initial = 0.0;
   double energy_rel_error_max = 0.0;
@@ -138,6 +139,7 @@ struct RunInfo {
   double cpu_seconds = 0.0;
   std::string status = "ok";
   long last_resort_steps = 0;                  // DriverState::last_resort_steps
+  KluSolver::Counters linear_solver;           // Stepper::linear_solver_counters, summed
   std::optional<StaticsOutcome> statics;       // when the scene ran [statics]
   bool static_analysis = false;                // the static solve was the whole run
   int increments = 0;                          // static: load increments asked for
