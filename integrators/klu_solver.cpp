@@ -279,11 +279,23 @@ struct KluSolver::Impl {
   // KINSOL and IDA call this at the start of every solve: the analysis and
   // the factorization stay (that is the point of this class).
   static int initialize(SUNLinearSolver s) { return static_cast<int>(of(s).last_flag = 0); }
+  // No exception may cross KINSOL or IDA (C code): the AMG path allocates
+  // with new (Eigen, std::vector), and a failure there (std::bad_alloc, a
+  // matrix too large for its int indices) is an unrecoverable set-up or
+  // solve failure, which the Newton solve reports with the time and residual.
   static int setup_op(SUNLinearSolver s, SUNMatrix a) {
-    return static_cast<int>(of(s).last_flag = of(s).setup(a));
+    try {
+      return static_cast<int>(of(s).last_flag = of(s).setup(a));
+    } catch (const std::exception&) {
+      return static_cast<int>(of(s).last_flag = SUNLS_PACKAGE_FAIL_UNREC);
+    }
   }
   static int solve_op(SUNLinearSolver s, SUNMatrix, N_Vector x, N_Vector b, realtype) {
-    return static_cast<int>(of(s).last_flag = of(s).solve(x, b));
+    try {
+      return static_cast<int>(of(s).last_flag = of(s).solve(x, b));
+    } catch (const std::exception&) {
+      return static_cast<int>(of(s).last_flag = SUNLS_PACKAGE_FAIL_UNREC);
+    }
   }
   static sunindextype last_flag_op(SUNLinearSolver s) { return of(s).last_flag; }
   static int space(SUNLinearSolver, long* real_words, long* int_words) {
