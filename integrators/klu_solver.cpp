@@ -67,7 +67,7 @@ struct KluSolver::Impl {
   // (keep_loaded); a kept matrix's own index arrays hold it.
   std::vector<long> outer, inner;
   const double* values = nullptr;  // the matrix's values (UMFPACK's solve reads them)
-  std::vector<double> rhs;         // UMFPACK's right-hand side
+  std::vector<double> rhs;         // the right-hand side (UMFPACK and GMRES read it)
   SUNMatrix loaded = nullptr;      // the matrix load() filled last
   // Backend::Amg
   Amg amg;
@@ -160,30 +160,25 @@ struct KluSolver::Impl {
       free_numeric();
       free_symbolic();
       pattern_changed = false;
-      if (backend == Backend::Amg && Amg::applies(n, ap, ai, ax, 2)) {
+      // Forced AMG where it applies; Auto asks KLU's analysis first.
+      bool take_amg = backend == Backend::Amg && Amg::applies(n, ap, ai, ax, 2);
+      in_use = backend == Backend::Umfpack ? Backend::Umfpack : Backend::Klu;
+      if (!take_amg && in_use == Backend::Klu) {
+        symbolic = klu_l_analyze(n, ap, ai, &common);
+        if (!symbolic) return SUNLS_PACKAGE_FAIL_UNREC;
+        if (backend == Backend::Auto) {
+          const double flops = estimated_flops(n, ap, ai) / double(n);
+          take_amg = flops >= kAmgFlops && Amg::applies(n, ap, ai, ax, 2);
+          if (take_amg || flops >= umfpack_flops) free_symbolic();
+          if (!take_amg && flops >= umfpack_flops) in_use = Backend::Umfpack;
+        }
+      }
+      if (take_amg) {
         in_use = Backend::Amg;
         ++counters.analyses;
         return amg_build(ap, ai, ax);
       }
       amg.clear();
-      in_use = backend == Backend::Umfpack ? Backend::Umfpack : Backend::Klu;
-      if (in_use == Backend::Klu) {
-        symbolic = klu_l_analyze(n, ap, ai, &common);
-        if (!symbolic) return SUNLS_PACKAGE_FAIL_UNREC;
-        if (backend == Backend::Auto) {
-          const double flops = estimated_flops(n, ap, ai) / double(n);
-          if (flops >= kAmgFlops && Amg::applies(n, ap, ai, ax, 2)) {
-            free_symbolic();
-            in_use = Backend::Amg;
-            ++counters.analyses;
-            return amg_build(ap, ai, ax);
-          }
-          if (flops >= umfpack_flops) {
-            free_symbolic();
-            in_use = Backend::Umfpack;
-          }
-        }
-      }
       if (in_use == Backend::Umfpack) {
         if (umfpack_dl_symbolic(n, n, ap, ai, ax, &umf_symbolic, umf_control, umf_info) !=
             UMFPACK_OK) {
@@ -223,13 +218,12 @@ struct KluSolver::Impl {
   // UMFPACK.
   int amg_solve(N_Vector x, N_Vector b) {
     const long n = n_in_use;
-    const double* bp = N_VGetArrayPointer(b);
-    std::vector<double> rhs_copy(bp, bp + n);  // x and b may be the same vector
+    rhs.assign(N_VGetArrayPointer(b), N_VGetArrayPointer(b) + n);  // x and b may be one vector
     double* xp = N_VGetArrayPointer(x);
     for (int attempt = 0; attempt < 2; ++attempt) {
       if (attempt == 1 && amg_build(ap_in_use, ai_in_use, values) != SUNLS_SUCCESS) break;
       const GmresResult r =
-          gmres(n, ap_in_use, ai_in_use, values, amg, rhs_copy.data(), xp, kKrylovTolerance,
+          gmres(n, ap_in_use, ai_in_use, values, amg, rhs.data(), xp, kKrylovTolerance,
                 kKrylovRestart, kKrylovMaxIterations, krylov_work);
       ++counters.krylov_solves;
       counters.krylov_iterations += r.iterations;
@@ -237,21 +231,25 @@ struct KluSolver::Impl {
       if (iterations_after_build < 0) iterations_after_build = r.iterations;
       if (r.converged) return SUNLS_SUCCESS;
     }
+    // UMFPACK, analysed and factored for this one solve (not counted as the
+    // backend's factorizations: amg_fallbacks counts it).
     ++counters.amg_fallbacks;
     rebuild = true;
-    long* ap = const_cast<long*>(ap_in_use);
-    long* ai = const_cast<long*>(ai_in_use);
-    double* ax = const_cast<double*>(values);
-    void* sym = nullptr;
-    void* num = nullptr;
-    long status = umfpack_dl_symbolic(n, n, ap, ai, ax, &sym, umf_control, umf_info);
+    long status = umfpack_dl_symbolic(n, n, ap_in_use, ai_in_use, values, &umf_symbolic,
+                                      umf_control, umf_info);
     if (status == UMFPACK_OK)
-      status = umfpack_dl_numeric(ap, ai, ax, sym, &num, umf_control, umf_info);
-    if (status == UMFPACK_OK)
-      status =
-          umfpack_dl_solve(UMFPACK_A, ap, ai, ax, xp, rhs_copy.data(), num, umf_control, umf_info);
-    if (num) umfpack_dl_free_numeric(&num);
-    if (sym) umfpack_dl_free_symbolic(&sym);
+      status = umfpack_dl_numeric(ap_in_use, ai_in_use, values, umf_symbolic, &umf_numeric,
+                                  umf_control, umf_info);
+    const int flag = status == UMFPACK_OK ? umf_solve(xp) : SUNLS_PACKAGE_FAIL_REC;
+    free_numeric();
+    free_symbolic();
+    return flag;
+  }
+
+  // x = A^-1 rhs by UMFPACK's factors (out of place: rhs holds b).
+  int umf_solve(double* x) {
+    const long status = umfpack_dl_solve(UMFPACK_A, ap_in_use, ai_in_use, values, x, rhs.data(),
+                                         umf_numeric, umf_control, umf_info);
     return status == UMFPACK_OK ? SUNLS_SUCCESS : SUNLS_PACKAGE_FAIL_REC;
   }
 
@@ -261,10 +259,7 @@ struct KluSolver::Impl {
     if (umf_numeric) {
       // UMFPACK solves out of place; x and b may be the same vector.
       rhs.assign(N_VGetArrayPointer(b), N_VGetArrayPointer(b) + N_VGetLength(b));
-      const long status =
-          umfpack_dl_solve(UMFPACK_A, ap_in_use, ai_in_use, values, N_VGetArrayPointer(x),
-                           rhs.data(), umf_numeric, umf_control, umf_info);
-      return status == UMFPACK_OK ? SUNLS_SUCCESS : SUNLS_PACKAGE_FAIL_REC;
+      return umf_solve(N_VGetArrayPointer(x));
     }
     N_VScale(1.0, b, x);
     const long n = N_VGetLength(x);
