@@ -66,6 +66,7 @@
 #include <sundials/sundials_linearsolver.h>
 #include <sundials/sundials_matrix.h>
 
+#include <array>
 #include <memory>
 #include <optional>
 #include <string>
@@ -101,15 +102,14 @@ class KluSolver {
     long krylov_solves = 0;           // GMRES solves
     long amg_fallbacks = 0;           // solves GMRES did not finish: factored by UMFPACK
 
-    Counters& operator+=(const Counters& o) {
-      analyses += o.analyses;
-      factorizations += o.factorizations;
-      refactorizations += o.refactorizations;
-      umfpack_factorizations += o.umfpack_factorizations;
-      amg_setups += o.amg_setups;
-      krylov_iterations += o.krylov_iterations;
-      krylov_solves += o.krylov_solves;
-      amg_fallbacks += o.amg_fallbacks;
+    /// Every count, in declaration order (sums, checkpoints).
+    std::array<long*, 8> fields() {
+      return {&analyses,   &factorizations,    &refactorizations, &umfpack_factorizations,
+              &amg_setups, &krylov_iterations, &krylov_solves,    &amg_fallbacks};
+    }
+    Counters& operator+=(Counters o) {
+      const auto mine = fields(), theirs = o.fields();
+      for (std::size_t k = 0; k < mine.size(); ++k) *mine[k] += *theirs[k];
       return *this;
     }
   };

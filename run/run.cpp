@@ -410,10 +410,8 @@ void write_checkpoint(const std::string& dir, const std::string& identity, const
   put_ints(out, c.state.active);
   for (long x : {c.history_offset, c.history_rows, c.last_written, c.fields_written}) put(out, x);
   put(out, c.cpu_seconds);
-  const KluSolver::Counters& k = c.linear_solver;
-  for (long x : {k.analyses, k.factorizations, k.refactorizations, k.umfpack_factorizations,
-                 k.amg_setups, k.krylov_iterations, k.krylov_solves, k.amg_fallbacks})
-    put(out, x);
+  KluSolver::Counters k = c.linear_solver;
+  for (const long* x : k.fields()) put(out, *x);
   put<std::uint64_t>(out, c.fields_index.size());
   for (const auto& [t, file] : c.fields_index) {
     put(out, t);
@@ -461,10 +459,7 @@ Checkpoint read_checkpoint(const std::string& dir, const std::string& identity,
     for (long* x : {&c.history_offset, &c.history_rows, &c.last_written, &c.fields_written})
       *x = get<long>(in);
     c.cpu_seconds = get<double>(in);
-    KluSolver::Counters& k = c.linear_solver;
-    for (long* x : {&k.analyses, &k.factorizations, &k.refactorizations, &k.umfpack_factorizations,
-                    &k.amg_setups, &k.krylov_iterations, &k.krylov_solves, &k.amg_fallbacks})
-      *x = get<long>(in);
+    for (long* x : c.linear_solver.fields()) *x = get<long>(in);
     const auto n = get<std::uint64_t>(in);
     for (std::uint64_t i = 0; i < n && in; ++i) {
       const double t = get<double>(in);
