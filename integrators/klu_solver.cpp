@@ -176,7 +176,7 @@ struct KluSolver::Impl {
       if (take_amg) {
         in_use = Backend::Amg;
         ++counters.analyses;
-        return amg_build(ap, ai, ax);
+        return amg_build_or_lu(ap, ai, ax);
       }
       amg.clear();
       if (in_use == Backend::Umfpack) {
@@ -191,7 +191,7 @@ struct KluSolver::Impl {
     }
     if (in_use == Backend::Amg) {
       if (rebuild || last_iterations > kAmgRebuildGrowth * iterations_after_build + 2)
-        return amg_build(ap, ai, ax);
+        return amg_build_or_lu(ap, ai, ax);
       return SUNLS_SUCCESS;
     }
     if (in_use == Backend::Umfpack) return umf_factor(ap, ai, ax);
@@ -211,6 +211,24 @@ struct KluSolver::Impl {
     iterations_after_build = -1;
     rebuild = false;
     return SUNLS_SUCCESS;
+  }
+
+  // A hierarchy of this matrix; where it has none (a diagonal entry that
+  // turned non-positive on a pattern that had them positive, a singular
+  // coarse level), UMFPACK factors this pattern's matrices instead until the
+  // pattern changes (counted as a fallback).
+  int amg_build_or_lu(long* ap, long* ai, double* ax) {
+    const int flag = amg_build(ap, ai, ax);
+    if (flag == SUNLS_SUCCESS) return flag;
+    amg.clear();
+    ++counters.amg_fallbacks;
+    in_use = Backend::Umfpack;
+    if (umfpack_dl_symbolic(n_in_use, n_in_use, ap, ai, ax, &umf_symbolic, umf_control,
+                            umf_info) != UMFPACK_OK) {
+      free_symbolic();
+      return SUNLS_PACKAGE_FAIL_UNREC;
+    }
+    return umf_factor(ap, ai, ax);
   }
 
   // GMRES on the current matrix with the kept hierarchy; when it does not
@@ -339,6 +357,10 @@ KluSolver::~KluSolver() = default;
 
 SUNLinearSolver KluSolver::get() const {
   return impl_->shell;
+}
+
+void KluSolver::renew_hierarchy() {
+  impl_->rebuild = true;
 }
 
 const KluSolver::Counters& KluSolver::counters() const {

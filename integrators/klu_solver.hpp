@@ -100,7 +100,8 @@ class KluSolver {
     long amg_setups = 0;              // AMG hierarchies built
     long krylov_iterations = 0;       // GMRES iterations over all solves
     long krylov_solves = 0;           // GMRES solves
-    long amg_fallbacks = 0;           // solves GMRES did not finish: factored by UMFPACK
+    long amg_fallbacks = 0;           // solves GMRES did not finish, and patterns with no
+                                      // hierarchy: factored by UMFPACK
 
     /// Every count, in declaration order (sums, checkpoints).
     std::array<long*, 8> fields() {
@@ -135,6 +136,10 @@ class KluSolver {
   /// over the whole matrix for nothing. Only for a matrix that is filled by
   /// load() alone.
   static void keep_loaded(SUNMatrix a);
+
+  /// The next set-up builds a new AMG hierarchy although the kept one still
+  /// serves (as after a solve GMRES could not finish); no effect on the LUs.
+  void renew_hierarchy();
 
   const Counters& counters() const;
   /// The backend the last analysis chose (Klu, Umfpack or Amg; Auto before any).

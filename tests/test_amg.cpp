@@ -129,6 +129,51 @@ TEST(Amg, ConstraintRowsGoToTheLu) {
   SUNMatDestroy(m);
 }
 
+// A pattern that had a hierarchy whose later matrix has none (here one
+// diagonal entry turned negative, as a softening material's can): the
+// set-up does not fail, UMFPACK factors that matrix (counted as a
+// fallback), the solve is the LU's, and a new pattern goes back to AMG.
+TEST(Amg, AMatrixWithNoHierarchyGoesToTheLu) {
+  SparseMatrix a = block_matrix(8);
+  const long n = a.cols();
+  const auto ctx = sundials::make_context();
+  KluSolver solver(ctx.get(), KluSolver::Ordering::Amd, KluSolver::Pivoting::Kept,
+                   KluSolver::Backend::Amg);
+  SUNMatrix m = SUNSparseMatrix(n, n, a.nonZeros(), CSC_MAT, ctx.get());
+  solver.load(a, m);
+  ASSERT_EQ(SUNLinSolSetup(solver.get(), m), SUNLS_SUCCESS);
+  EXPECT_EQ(solver.backend_in_use(), KluSolver::Backend::Amg);
+  EXPECT_EQ(solver.counters().amg_setups, 1);
+  // The same pattern, the diagonal of dof 5 negative: no hierarchy.
+  a.coeffRef(5, 5) = -a.coeff(5, 5);
+  ASSERT_FALSE(Amg::applies(n, a.outerIndexPtr(), a.innerIndexPtr(), a.valuePtr(), 2));
+  solver.load(a, m);
+  // A solve that slowed down asks for a new hierarchy at the next set-up;
+  // with this matrix there is none.
+  solver.renew_hierarchy();
+  ASSERT_EQ(SUNLinSolSetup(solver.get(), m), SUNLS_SUCCESS);
+  EXPECT_EQ(solver.backend_in_use(), KluSolver::Backend::Umfpack);
+  EXPECT_EQ(solver.counters().amg_fallbacks, 1);
+  Vec b(n);
+  for (long i = 0; i < n; ++i) b[i] = std::cos(0.37 * double(i)) + 0.5;
+  N_Vector nb = N_VMake_Serial(n, b.data(), ctx.get());
+  Vec x = Vec::Zero(n);
+  N_Vector nx = N_VMake_Serial(n, x.data(), ctx.get());
+  ASSERT_EQ(SUNLinSolSolve(solver.get(), m, nx, nb, 0.0), SUNLS_SUCCESS);
+  EXPECT_LE((b - a * x).norm() / b.norm(), 1e-12);
+  // A new pattern (one entry more) is analysed anew, and has a hierarchy.
+  SparseMatrix c = block_matrix(8);
+  c.coeffRef(0, n - 1) = 1e-6;
+  c.coeffRef(n - 1, 0) = 1e-6;
+  c.makeCompressed();
+  solver.load(c, m);
+  ASSERT_EQ(SUNLinSolSetup(solver.get(), m), SUNLS_SUCCESS);
+  EXPECT_EQ(solver.backend_in_use(), KluSolver::Backend::Amg);
+  N_VDestroy(nb);
+  N_VDestroy(nx);
+  SUNMatDestroy(m);
+}
+
 // Auto takes AMG where it applies and KLU's analysis estimates
 // KluSolver::kAmgFlops or more per unknown: a 100 x 100 square block
 // (20 402 dofs, 1.7e4 flops per unknown) goes to AMG, a thin ring of
