@@ -223,8 +223,8 @@ struct KluSolver::Impl {
     amg.clear();
     ++counters.amg_fallbacks;
     in_use = Backend::Umfpack;
-    if (umfpack_dl_symbolic(n_in_use, n_in_use, ap, ai, ax, &umf_symbolic, umf_control,
-                            umf_info) != UMFPACK_OK) {
+    if (umfpack_dl_symbolic(n_in_use, n_in_use, ap, ai, ax, &umf_symbolic, umf_control, umf_info) !=
+        UMFPACK_OK) {
       free_symbolic();
       return SUNLS_PACKAGE_FAIL_UNREC;
     }
