@@ -82,11 +82,78 @@ Jet<N> operator*(double a, const Jet<N>& b) {
   return r;
 }
 
+/// First order only: a value and its gradient, for where the Hessian is not
+/// wanted (the residual's gradients). Its gradients are a Jet's, operation
+/// for operation.
+template <int N>
+struct Dual {
+  using V = Eigen::Matrix<double, N, 1>;
+  double v = 0.0;
+  V g = V::Zero();
+
+  Dual() = default;
+  Dual(double value) : v(value) {}  // NOLINT: constants convert implicitly
+  static Dual variable(double value, int i) {
+    Dual d(value);
+    d.g[i] = 1.0;
+    return d;
+  }
+};
+
+template <int N>
+Dual<N> operator+(const Dual<N>& a, const Dual<N>& b) {
+  Dual<N> r;
+  r.v = a.v + b.v;
+  r.g = a.g + b.g;
+  return r;
+}
+template <int N>
+Dual<N> operator-(const Dual<N>& a, const Dual<N>& b) {
+  Dual<N> r;
+  r.v = a.v - b.v;
+  r.g = a.g - b.g;
+  return r;
+}
+template <int N>
+Dual<N> operator*(const Dual<N>& a, const Dual<N>& b) {
+  Dual<N> r;
+  r.v = a.v * b.v;
+  r.g = a.v * b.g + b.v * a.g;
+  return r;
+}
+template <int N>
+Dual<N> operator/(const Dual<N>& a, const Dual<N>& b) {
+  Dual<N> inv;
+  const double ib = 1.0 / b.v;
+  inv.v = ib;
+  inv.g = -ib * ib * b.g;
+  return a * inv;
+}
+template <int N>
+Dual<N> operator+(const Dual<N>& a, double b) {
+  return a + Dual<N>(b);
+}
+template <int N>
+Dual<N> operator-(double a, const Dual<N>& b) {
+  return Dual<N>(a) - b;
+}
+template <int N>
+Dual<N> operator*(double a, const Dual<N>& b) {
+  Dual<N> r = b;
+  r.v *= a;
+  r.g *= a;
+  return r;
+}
+
 inline double value_of(double x) {
   return x;
 }
 template <int N>
 double value_of(const Jet<N>& x) {
+  return x.v;
+}
+template <int N>
+double value_of(const Dual<N>& x) {
   return x.v;
 }
 

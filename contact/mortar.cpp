@@ -43,6 +43,7 @@ unsigned mortar_pair_case(const double pi[5]) {
 
 template double mortar_pair_gap<double>(const double pi[5], int a);
 template Jet<5> mortar_pair_gap<Jet<5>>(const Jet<5> pi[5], int a);
+template Dual<5> mortar_pair_gap<Dual<5>>(const Dual<5> pi[5], int a);
 
 namespace {
 
@@ -93,32 +94,66 @@ MortarGapTerm::MortarGapTerm(const std::vector<int>& nodes, std::vector<MortarPa
   if (!(weight_ > 0)) throw std::invalid_argument(name_ + ": mortar weight must be positive");
 }
 
+namespace {
+
+// The vectors of a pair's invariants at q (local): a = x2s - x1s along the
+// slave segment, e1 = x1m - x1s and e2 = x2m - x1s to the master's ends.
+struct PairVectors {
+  Eigen::Vector2d a, e1, e2;
+};
+
+template <class Dof>
+PairVectors pair_vectors(const Vec& q, const std::array<int, 4>& ln, Dof dof) {
+  const auto x = [&](int k) { return Eigen::Vector2d(q[dof(ln[k], 0)], q[dof(ln[k], 1)]); };
+  const Eigen::Vector2d x1s = x(0);
+  return {x(1) - x1s, x(2) - x1s, x(3) - x1s};
+}
+
+// u x v = u_x v_y - u_y v_x
+double cross(const Eigen::Vector2d& u, const Eigen::Vector2d& v) {
+  return u.x() * v.y() - u.y() * v.x();
+}
+
+}  // namespace
+
+// pi_k = 1/2 x^T A_k x (PairForms), formed from the difference vectors:
+// a.a, a.e1, a.e2, e1 x a, e2 x a. The differences come first, so the
+// invariants carry no cancellation of the coordinates' size.
 void MortarGapTerm::invariants(const Vec& q, Vec& pi) const {
   pi.resize(n_invariants());
-  Eigen::Matrix<double, 8, 1> x;
+  const auto local = [this](int n, int c) { return dof(n, c); };
   for (std::size_t b = 0; b < pairs_.size(); ++b) {
-    for (int k = 0; k < 4; ++k)
-      x.segment<2>(2 * k) =
-          q.segment<2>(dof(pairs_[b].local_nodes[static_cast<std::size_t>(k)], 0));
-    for (int k = 0; k < 5; ++k)
-      pi[static_cast<Eigen::Index>(5 * b) + k] =
-          0.5 * x.dot(forms().a[static_cast<std::size_t>(k)] * x);
+    const PairVectors v = pair_vectors(q, pairs_[b].local_nodes, local);
+    double* p = pi.data() + 5 * b;
+    p[0] = v.a.dot(v.a);
+    p[1] = v.a.dot(v.e1);
+    p[2] = v.a.dot(v.e2);
+    p[3] = cross(v.e1, v.a);
+    p[4] = cross(v.e2, v.a);
   }
 }
 
+// Row k of block b is A_k x: d pi_k / d (x1s, x2s, x1m, x2m).
 void MortarGapTerm::invariant_jacobian(const Vec& q, Mat& dpi) const {
   dpi.setZero(n_invariants(), n_local());
-  Eigen::Matrix<double, 8, 1> x;
+  const auto local = [this](int n, int c) { return dof(n, c); };
   for (std::size_t b = 0; b < pairs_.size(); ++b) {
     const auto& ln = pairs_[b].local_nodes;
-    for (int k = 0; k < 4; ++k)
-      x.segment<2>(2 * k) = q.segment<2>(dof(ln[static_cast<std::size_t>(k)], 0));
-    for (int k = 0; k < 5; ++k) {
-      const Eigen::Matrix<double, 8, 1> row = forms().a[static_cast<std::size_t>(k)] * x;
-      for (int j = 0; j < 4; ++j)
-        for (int c = 0; c < 2; ++c)
-          dpi(static_cast<Eigen::Index>(5 * b) + k, dof(ln[static_cast<std::size_t>(j)], c)) +=
-              row[2 * j + c];
+    const PairVectors v = pair_vectors(q, ln, local);
+    const Eigen::Index r = static_cast<Eigen::Index>(5 * b);
+    const auto add = [&](int k, int node, const Eigen::Vector2d& d) {
+      dpi(r + k, dof(ln[static_cast<std::size_t>(node)], 0)) += d.x();
+      dpi(r + k, dof(ln[static_cast<std::size_t>(node)], 1)) += d.y();
+    };
+    // d(u x a)/du = (a_y, -a_x), d(u x a)/da = (-u_y, u_x)
+    const Eigen::Vector2d turned_a(v.a.y(), -v.a.x());
+    add(0, 0, -2.0 * v.a), add(0, 1, 2.0 * v.a);
+    add(1, 0, -(v.e1 + v.a)), add(1, 1, v.e1), add(1, 2, v.a);
+    add(2, 0, -(v.e2 + v.a)), add(2, 1, v.e2), add(2, 3, v.a);
+    for (int k = 3; k < 5; ++k) {
+      const Eigen::Vector2d& e = k == 3 ? v.e1 : v.e2;
+      const Eigen::Vector2d turned_e(-e.y(), e.x());
+      add(k, 0, -(turned_a + turned_e)), add(k, 1, turned_e), add(k, k - 1, turned_a);
     }
   }
 }
@@ -144,9 +179,9 @@ double MortarGapTerm::block_value(int block, const VecRef& pi, double) const {
 }
 
 void MortarGapTerm::block_gradient(int block, const VecRef& pi, double, Eigen::Ref<Vec> g) const {
-  Jet<5> p[5];
-  for (int k = 0; k < 5; ++k) p[k] = Jet<5>::variable(pi[k], k);
-  const Jet<5> f = mortar_pair_gap(p, pairs_[static_cast<std::size_t>(block)].slave_node);
+  Dual<5> p[5];
+  for (int k = 0; k < 5; ++k) p[k] = Dual<5>::variable(pi[k], k);
+  const Dual<5> f = mortar_pair_gap(p, pairs_[static_cast<std::size_t>(block)].slave_node);
   g = f.g / weight_;
 }
 

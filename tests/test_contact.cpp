@@ -106,6 +106,39 @@ TEST(MortarGapTerm, DiscreteGradientEnergyIdentityAcrossSegmentation) {
   }
 }
 
+// The invariants are quadratic forms of the coordinates: pi(x) = 1/2 x . dpi/dx
+// (Euler, degree 2), and the Jacobian is the invariants' derivative (central
+// differences); the Dual gradient of the gap is the Jet's, bit for bit.
+TEST(MortarGapTerm, InvariantsAreQuadraticFormsAndTheJacobianTheirDerivative) {
+  auto term = node_term();
+  std::mt19937 rng(5);
+  for (int trial = 0; trial < 20; ++trial) {
+    const Vec q = node_config(rng, 0.3);
+    Vec pi;
+    Mat dpi;
+    term->invariants(q, pi);
+    term->invariant_jacobian(q, dpi);
+    ASSERT_EQ(dpi.rows(), pi.size());
+    EXPECT_LE((0.5 * dpi * q - pi).cwiseAbs().maxCoeff(), 1e-14);
+    const double h = 1e-6;
+    for (Eigen::Index j = 0; j < q.size(); ++j) {
+      Vec qp = q, qm = q, pp, pm;
+      qp[j] += h, qm[j] -= h;
+      term->invariants(qp, pp);
+      term->invariants(qm, pm);
+      EXPECT_LE(((pp - pm) / (2 * h) - dpi.col(j)).cwiseAbs().maxCoeff(), 1e-9) << j;
+    }
+    for (int b = 0; b < term->n_blocks(); ++b) {
+      Vec g(5);
+      term->block_gradient(b, pi.segment(5 * b, 5), 0.0, g);
+      Jet<5> p[5];
+      for (int k = 0; k < 5; ++k) p[k] = Jet<5>::variable(pi[5 * b + k], k);
+      const Jet<5> f = mortar_pair_gap(p, b % 2 == 0 ? 1 : 0);
+      for (int k = 0; k < 5; ++k) EXPECT_EQ(g[k], f.g[k]) << b << " " << k;
+    }
+  }
+}
+
 TEST(MortarGapTerm, InvariantUnderRigidMotion) {
   auto term = node_term();
   std::mt19937 rng(2);
