@@ -253,6 +253,7 @@ ConsistentStart consistent_start(const System& s, double t, const Vec& q, const 
 void IdaStepper::Impl::allocate(double t, const Vec& y0) {
   if (mem) retire_counters();
   mem.reset();
+  if (klu) klu_done += klu->counters();
   klu.reset();
   jmat.reset();
   m = m_sys + static_cast<int>(active.size());
@@ -509,6 +510,12 @@ IdaStepper::IdaStepper(const System& system, IdaSettings settings)
 }
 
 IdaStepper::~IdaStepper() = default;
+
+KluSolver::Counters IdaStepper::linear_solver_counters() const {
+  KluSolver::Counters c = impl_->klu_done;
+  if (impl_->klu) c += impl_->klu->counters();
+  return c;
+}
 IdaStepper::IdaStepper(IdaStepper&&) noexcept = default;
 IdaStepper& IdaStepper::operator=(IdaStepper&&) noexcept = default;
 

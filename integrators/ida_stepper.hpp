@@ -106,6 +106,8 @@ class IdaStepper final : public Stepper {
   IdaStepper& operator=(const IdaStepper&) = delete;
 
   std::string name() const override { return "ida"; }
+  /// The linear solver's work over every (re)start of IDA.
+  KluSolver::Counters linear_solver_counters() const override;
 
   /// Advances `state` to state.t + dt (see the contract in stepper.hpp).
   /// StepStats::iterations = IDA's nonlinear iterations in this call;

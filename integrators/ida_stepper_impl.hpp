@@ -73,6 +73,7 @@ struct IdaStepper::Impl {
   sundials::Vector atolv;  // absolute tolerances (the multipliers' held up)
   sundials::Matrix jmat;
   std::unique_ptr<KluSolver> klu;
+  KluSolver::Counters klu_done;  // of the solvers of earlier (re)starts
   sundials::Memory<IDAFree> mem;
 
   bool need_restart = true;

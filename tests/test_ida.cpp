@@ -493,6 +493,14 @@ TEST(IdaContact, RingImpactThroughImpactAndRelease) {
   EXPECT_LE(f.energy_rise, 1e-4);
   EXPECT_GE(f.energy_lost, 0.015);  // measured 0.0199
   EXPECT_LE(f.energy_lost, 0.025);
+  // The linear solver's work, summed over the restarts: an analysis at each
+  // restart that builds the solver anew (a new active set; a restart with
+  // the same one keeps it), a fresh factorization at every set-up.
+  const KluSolver::Counters c = ida.linear_solver_counters();
+  EXPECT_GE(c.analyses, 2);  // not only the last solver's one (measured 32)
+  EXPECT_LE(c.analyses, ida.n_initializations());
+  EXPECT_GE(c.factorizations, c.analyses);
+  EXPECT_EQ(c.refactorizations, 0);
 }
 
 TEST(IdaContact, ImpactAfterALongFreeFlightIsCaught) {
