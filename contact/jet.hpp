@@ -145,6 +145,43 @@ Dual<N> operator*(double a, const Dual<N>& b) {
   return r;
 }
 
+/// Second order along one direction: f, df and d2f of f(p + e d) in e at
+/// e = 0, for the curvature d^T H d without the Hessian (Term::block_curvature).
+struct Taylor2 {
+  double v = 0.0, d1 = 0.0, d2 = 0.0;
+
+  Taylor2() = default;
+  Taylor2(double value) : v(value) {}  // NOLINT: constants convert implicitly
+  Taylor2(double value, double first, double second) : v(value), d1(first), d2(second) {}
+};
+
+inline Taylor2 operator+(const Taylor2& a, const Taylor2& b) {
+  return {a.v + b.v, a.d1 + b.d1, a.d2 + b.d2};
+}
+inline Taylor2 operator-(const Taylor2& a, const Taylor2& b) {
+  return {a.v - b.v, a.d1 - b.d1, a.d2 - b.d2};
+}
+inline Taylor2 operator*(const Taylor2& a, const Taylor2& b) {
+  return {a.v * b.v, a.v * b.d1 + b.v * a.d1, a.v * b.d2 + 2.0 * a.d1 * b.d1 + b.v * a.d2};
+}
+inline Taylor2 operator/(const Taylor2& a, const Taylor2& b) {
+  // 1/b: -b'/b^2, 2 b'^2/b^3 - b''/b^2
+  const double ib = 1.0 / b.v;
+  return a * Taylor2(ib, -ib * ib * b.d1, 2.0 * ib * ib * ib * b.d1 * b.d1 - ib * ib * b.d2);
+}
+inline Taylor2 operator+(const Taylor2& a, double b) {
+  return a + Taylor2(b);
+}
+inline Taylor2 operator-(double a, const Taylor2& b) {
+  return Taylor2(a) - b;
+}
+inline Taylor2 operator*(double a, const Taylor2& b) {
+  return {a * b.v, a * b.d1, a * b.d2};
+}
+inline double value_of(const Taylor2& x) {
+  return x.v;
+}
+
 inline double value_of(double x) {
   return x;
 }

@@ -44,6 +44,7 @@ unsigned mortar_pair_case(const double pi[5]) {
 template double mortar_pair_gap<double>(const double pi[5], int a);
 template Jet<5> mortar_pair_gap<Jet<5>>(const Jet<5> pi[5], int a);
 template Dual<5> mortar_pair_gap<Dual<5>>(const Dual<5> pi[5], int a);
+template Taylor2 mortar_pair_gap<Taylor2>(const Taylor2 pi[5], int a);
 
 namespace {
 
@@ -190,6 +191,13 @@ void MortarGapTerm::block_hessian(int block, const VecRef& pi, double, Eigen::Re
   for (int k = 0; k < 5; ++k) p[k] = Jet<5>::variable(pi[k], k);
   const Jet<5> f = mortar_pair_gap(p, pairs_[static_cast<std::size_t>(block)].slave_node);
   h = f.h / weight_;
+}
+
+double MortarGapTerm::block_curvature(int block, const VecRef& pi, double, const VecRef& d,
+                                      Mat&) const {
+  Taylor2 p[5];
+  for (int k = 0; k < 5; ++k) p[k] = Taylor2(pi[k], d[k], 0.0);
+  return mortar_pair_gap(p, pairs_[static_cast<std::size_t>(block)].slave_node).d2 / weight_;
 }
 
 PathSmoothness MortarGapTerm::smoothness_between(int, const VecRef& pi0, const VecRef& pi1) const {

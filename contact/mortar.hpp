@@ -75,6 +75,9 @@ class MortarGapTerm final : public Term {
   double block_value(int block, const VecRef& pi, double t) const override;
   void block_gradient(int block, const VecRef& pi, double t, Eigen::Ref<Vec> g) const override;
   void block_hessian(int block, const VecRef& pi, double t, Eigen::Ref<Mat> h) const override;
+  /// By a Taylor2 along d: no Hessian formed.
+  double block_curvature(int block, const VecRef& pi, double t, const VecRef& d,
+                         Mat& h) const override;
   std::string describe() const override { return name_; }
   /// The segmentation case (which of 0, pi1, pi2, pi3 bound the mortar
   /// segment, and whether it is empty) is the same at both ends: every case

@@ -25,6 +25,12 @@ double Term::value(const Vec& q, double t) const {
 double Term::block_value_t(int, const VecRef&, double) const {
   throw std::logic_error(describe() + ": block_value_t called without has_time_derivatives()");
 }
+double Term::block_curvature(int block, const VecRef& pi, double t, const VecRef& d, Mat& h) const {
+  h.resize(block_size_, block_size_);
+  block_hessian(block, pi, t, h);
+  return d.dot(h.lazyProduct(d));
+}
+
 void Term::block_gradient_t(int, const VecRef&, double, Eigen::Ref<Vec>) const {
   throw std::logic_error(describe() + ": block_gradient_t called without has_time_derivatives()");
 }

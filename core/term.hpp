@@ -72,6 +72,12 @@ class Term {
   virtual double block_value(int block, const VecRef& pi, double t) const = 0;
   virtual void block_gradient(int block, const VecRef& pi, double t, Eigen::Ref<Vec> g) const = 0;
   virtual void block_hessian(int block, const VecRef& pi, double t, Eigen::Ref<Mat> h) const = 0;
+  /// d^T (Hessian of f~_b at pi) d, the curvature along d that the discrete
+  /// gradient's quadrature needs (core/gradient.cpp). Default: from
+  /// block_hessian(), into `h` (block_size() x block_size() scratch); a term
+  /// can take the second derivative along d alone, which is cheaper.
+  virtual double block_curvature(int block, const VecRef& pi, double t, const VecRef& d,
+                                 Mat& h) const;
 
   /// True when every f~_b is at most quadratic in pi: then the discrete
   /// gradient equals the gradient at pi_mid and the correction is skipped.

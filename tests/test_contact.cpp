@@ -139,6 +139,32 @@ TEST(MortarGapTerm, InvariantsAreQuadraticFormsAndTheJacobianTheirDerivative) {
   }
 }
 
+// The curvature along a direction by Taylor2 is d^T H d of the Jet's Hessian
+// (the discrete gradient's quadrature uses it instead of two Hessians).
+TEST(MortarGapTerm, CurvatureAlongADirectionIsTheHessiansQuadraticForm) {
+  auto term = node_term();
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  int compared = 0;
+  for (int trial = 0; trial < 50; ++trial) {
+    const Vec q = node_config(rng, 0.3);
+    Vec pi;
+    term->invariants(q, pi);
+    for (int b = 0; b < term->n_blocks(); ++b) {
+      Vec d(5);
+      for (int k = 0; k < 5; ++k) d[k] = u(rng) * std::abs(pi[5 * b + k]);
+      Mat h(5, 5), scratch;
+      term->block_hessian(b, pi.segment(5 * b, 5), 0.0, h);
+      const double expected = d.dot(h * d);
+      const double got = term->block_curvature(b, pi.segment(5 * b, 5), 0.0, d, scratch);
+      EXPECT_NEAR(got, expected, 1e-12 * (std::abs(expected) + (h.norm() * d.squaredNorm())))
+          << trial << " " << b;
+      compared += expected != 0.0;
+    }
+  }
+  EXPECT_GE(compared, 50);  // pairs that overlap, with a curved gap
+}
+
 TEST(MortarGapTerm, InvariantUnderRigidMotion) {
   auto term = node_term();
   std::mt19937 rng(2);
