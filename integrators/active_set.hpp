@@ -102,6 +102,8 @@ class ActiveSet {
   /// Its contact condition is an equilibrium at each step's end: it enters
   /// and leaves there, with no impact to locate and no energy lost.
   bool algebraic(int id) const;
+  /// Whether targets keep a closed node's gap (dynamics).
+  bool persistency() const { return persistency_; }
 
   /// The targets of the active nodes for a (sub-)step starting at s (see
   /// the header comment), in the order of s.active: the gap each must have

@@ -178,6 +178,8 @@ StepStats ContactStepper::substep(SubstepScheme& scheme, State& s, double h) {
   total.converged = true;
   const std::vector<int> before = s.active;
   set_.begin(s);
+  if (set_.persistency()) settle_changed_functions(s);
+  std::vector<int> pinned;  // closed at the start, re-entered: not released again
   auto accept = [&](State& end, const StepStats& r) {
     last_h_ = end.t - s.t;
     s = std::move(end);
@@ -190,7 +192,6 @@ StepStats ContactStepper::substep(SubstepScheme& scheme, State& s, double h) {
     return total;
   };
 
-  std::vector<int> pinned;  // closed at the start, re-entered: not released again
   // Massless nodes that hit enter for the whole sub-step (below); should
   // that solve fail and impacts be located (scheme.impact = locate), the
   // sub-step is tried again from its start with their impacts located like
@@ -232,6 +233,21 @@ StepStats ContactStepper::substep(SubstepScheme& scheme, State& s, double h) {
       continue;
     }
     if (!r.converged) {
+      // Newton could not pull the nodes found inside at the start to 0:
+      // they keep their gap (settle_changed_functions), and the sub-step is
+      // solved again.
+      bool kept_inside = false;
+      for (int id : inside_)
+        if (set_.is_active(s, id) && !contains(kept_, id)) {
+          kept_.push_back(id);
+          kept_inside = true;
+        }
+      if (kept_inside) {
+        have_guess = false;
+        continue;
+      }
+    }
+    if (!r.converged) {
       // The last resort (keep_deep_entries()): an active node that was
       // already below -tol at the sub-step's start entered there
       // (re-entered, or found inside by the search at the step's start,
@@ -257,6 +273,9 @@ StepStats ContactStepper::substep(SubstepScheme& scheme, State& s, double h) {
       total.converged = false;
       return total;
     }
+    // Nodes found inside at the start whose pull to 0 cost energy keep
+    // their gap instead, and the sub-step is solved again.
+    if (keep_costly_entries(s, trial)) continue;
     // A re-solve with a changed active set starts from this trial's end:
     // positions, and the multipliers of the nodes that stay active (one or
     // two Newton iterations instead of three or four from the predictor).
@@ -336,6 +355,62 @@ StepStats ContactStepper::substep(SubstepScheme& scheme, State& s, double h) {
   return total;
 }
 
+// The contact functions are prepared anew at each step's start (the
+// search's segment pairs, the engagement threshold), and a function can
+// change there: a node that ended the last step closed or open can start
+// this one inside or apart by more than the gap tolerance, with no bracket to
+// locate anything in. Pulling it to 0 within the sub-step does the work
+// lambda Phi_0, which with a sliver's multiplier was up to 8.5 times the
+// energy (tests/test_impact_sweep.cpp, kinds B and A''). So:
+//  - an active node apart at the start (Phi_0 > tol) is released: should it
+//    close within the sub-step, that is an impact like any other;
+//  - a node inside at the start (Phi_0 < -tol) is noted in inside_. If it
+//    is active, or becomes active in the sub-step (it still penetrates at
+//    the end: re-entered for the whole sub-step), the sub-step is solved
+//    pulling it to 0; where that did more work than kInsideWork of the
+//    energy (keep_costly_entries), or Newton could not do it, the node keeps
+//    the gap it has instead while it stays active, as at an engagement jump
+//    (locate()): no work, the gap reported as the violation it is. One that
+//    leaves the other body by itself within the sub-step never enters.
+// Nodes that entered open in this step's treatment, algebraic and penalized
+// nodes, and nodes that already keep their gap are left alone.
+void ContactStepper::settle_changed_functions(State& s) {
+  const double tol = set_.gap_tolerance();
+  inside_.clear();
+  for (std::size_t k = s.active.size(); k-- > 0;) {
+    const int id = s.active[k];
+    if (set_.penalized(id) || set_.algebraic(id) || contains(kept_, id)) continue;
+    const double g = set_.gap(id, s.q);
+    if (!std::isfinite(g)) continue;
+    if (g < -tol) inside_.push_back(id);
+    if (g > tol) release_candidate(s, k);
+  }
+  for (int id = 0; id < system_.n_unilateral(); ++id) {
+    if (set_.is_active(s, id) || set_.penalized(id) || set_.algebraic(id)) continue;
+    const double g = set_.gap(id, s.q);
+    if (std::isfinite(g) && g < -tol) inside_.push_back(id);
+  }
+}
+
+bool ContactStepper::keep_costly_entries(const State& s, const State& end) {
+  if (inside_.empty()) return false;
+  const Eigen::Index n_static = end.lambda.size() - static_cast<Eigen::Index>(end.active.size());
+  double energy = -1.0;
+  bool kept = false;
+  for (std::size_t k = 0; k < s.active.size() && k < end.active.size(); ++k) {
+    const int id = s.active[k];
+    if (!contains(inside_, id) || contains(kept_, id)) continue;
+    if (energy < 0.0) energy = std::abs(measure(system_, s.q, s.v, s.t).total());
+    const double work =
+        std::abs(end.lambda[n_static + static_cast<Eigen::Index>(k)] * set_.gap(id, s.q));
+    if (work > kInsideWork * energy) {
+      kept_.push_back(id);
+      kept = true;
+    }
+  }
+  return kept;
+}
+
 ContactStepper::Outcome ContactStepper::locate(SubstepScheme& scheme, State& s, const State& end,
                                                double h, std::vector<int>& pinned, StepStats& total,
                                                StepStats& accepted) {
@@ -407,7 +482,6 @@ ContactStepper::Outcome ContactStepper::locate(SubstepScheme& scheme, State& s, 
         reentered = true;
       }
     if (reentered) return Outcome::Retry;
-
     const double g = set_.min_gap(open, sub.q);
     const bool collapsed = b.tau - a.tau <= 1e-14 * h;
     if ((g >= -tol && g <= tol) || collapsed) {

@@ -97,6 +97,8 @@ class ContactStepper {
   struct Point;
   enum class Outcome { Accepted, Retry, Failed };
   StepStats substep(SubstepScheme& scheme, State& s, double h);
+  void settle_changed_functions(State& s);
+  bool keep_costly_entries(const State& s, const State& end);
   Outcome locate(SubstepScheme& scheme, State& s, const State& end, double h,
                  std::vector<int>& pinned, StepStats& total, StepStats& accepted);
   void velocity_update(SubstepScheme& scheme, const State& start, State& end,
@@ -112,6 +114,11 @@ class ContactStepper {
   // gap as target (locate()).
   std::vector<int> kept_;
   bool keep_deep_ = false;  // keep_deep_entries() for the current step
+  // Nodes found inside at the sub-step's start (settle_changed_functions),
+  // and the work, relative to the energy, above which pulling one to 0
+  // makes it keep its gap instead.
+  std::vector<int> inside_;
+  static constexpr double kInsideWork = 1e-12;
 };
 
 }  // namespace emdae
