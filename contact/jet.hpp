@@ -11,16 +11,23 @@
 
 #include <Eigen/Dense>
 #include <cmath>
+#include <type_traits>
 
 namespace emdae {
 
-template <int N>
+/// A Jet without the Hessian's storage (Dual below).
+struct NoHessian {};
+
+/// Value and gradient, and with `Hessian` the Hessian too. The first-order
+/// kind (Dual) computes its value and gradient operation for operation as
+/// the second-order one: the same numbers, without the Hessian's work.
+template <int N, bool Hessian = true>
 struct Jet {
   using V = Eigen::Matrix<double, N, 1>;
-  using M = Eigen::Matrix<double, N, N>;
+  using M = std::conditional_t<Hessian, Eigen::Matrix<double, N, N>, NoHessian>;
   double v = 0.0;
   V g = V::Zero();
-  M h = M::Zero();
+  M h = zero_hessian();
 
   Jet() = default;
   Jet(double value) : v(value) {}  // NOLINT: constants convert implicitly
@@ -29,119 +36,67 @@ struct Jet {
     j.g[i] = 1.0;
     return j;
   }
-};
-
-template <int N>
-Jet<N> operator+(const Jet<N>& a, const Jet<N>& b) {
-  Jet<N> r;
-  r.v = a.v + b.v;
-  r.g = a.g + b.g;
-  r.h = a.h + b.h;
-  return r;
-}
-template <int N>
-Jet<N> operator-(const Jet<N>& a, const Jet<N>& b) {
-  Jet<N> r;
-  r.v = a.v - b.v;
-  r.g = a.g - b.g;
-  r.h = a.h - b.h;
-  return r;
-}
-template <int N>
-Jet<N> operator*(const Jet<N>& a, const Jet<N>& b) {
-  Jet<N> r;
-  r.v = a.v * b.v;
-  r.g = a.v * b.g + b.v * a.g;
-  r.h = a.v * b.h + b.v * a.h + a.g * b.g.transpose() + b.g * a.g.transpose();
-  return r;
-}
-template <int N>
-Jet<N> operator/(const Jet<N>& a, const Jet<N>& b) {
-  // a / b = a * (1/b); d(1/b) = -db/b^2, d2(1/b) = 2 db db^T / b^3 - d2b / b^2
-  Jet<N> inv;
-  const double ib = 1.0 / b.v;
-  inv.v = ib;
-  inv.g = -ib * ib * b.g;
-  inv.h = 2 * ib * ib * ib * (b.g * b.g.transpose()) - ib * ib * b.h;
-  return a * inv;
-}
-template <int N>
-Jet<N> operator+(const Jet<N>& a, double b) {
-  return a + Jet<N>(b);
-}
-template <int N>
-Jet<N> operator-(double a, const Jet<N>& b) {
-  return Jet<N>(a) - b;
-}
-template <int N>
-Jet<N> operator*(double a, const Jet<N>& b) {
-  Jet<N> r = b;
-  r.v *= a;
-  r.g *= a;
-  r.h *= a;
-  return r;
-}
-
-/// First order only: a value and its gradient, for where the Hessian is not
-/// wanted (the residual's gradients). Its gradients are a Jet's, operation
-/// for operation.
-template <int N>
-struct Dual {
-  using V = Eigen::Matrix<double, N, 1>;
-  double v = 0.0;
-  V g = V::Zero();
-
-  Dual() = default;
-  Dual(double value) : v(value) {}  // NOLINT: constants convert implicitly
-  static Dual variable(double value, int i) {
-    Dual d(value);
-    d.g[i] = 1.0;
-    return d;
+  static M zero_hessian() {
+    if constexpr (Hessian)
+      return M::Zero();
+    else
+      return {};
   }
 };
 
+/// First order only: a value and its gradient, for where the Hessian is not
+/// wanted (the residual's gradients).
 template <int N>
-Dual<N> operator+(const Dual<N>& a, const Dual<N>& b) {
-  Dual<N> r;
+using Dual = Jet<N, false>;
+
+template <int N, bool H>
+Jet<N, H> operator+(const Jet<N, H>& a, const Jet<N, H>& b) {
+  Jet<N, H> r;
   r.v = a.v + b.v;
   r.g = a.g + b.g;
+  if constexpr (H) r.h = a.h + b.h;
   return r;
 }
-template <int N>
-Dual<N> operator-(const Dual<N>& a, const Dual<N>& b) {
-  Dual<N> r;
+template <int N, bool H>
+Jet<N, H> operator-(const Jet<N, H>& a, const Jet<N, H>& b) {
+  Jet<N, H> r;
   r.v = a.v - b.v;
   r.g = a.g - b.g;
+  if constexpr (H) r.h = a.h - b.h;
   return r;
 }
-template <int N>
-Dual<N> operator*(const Dual<N>& a, const Dual<N>& b) {
-  Dual<N> r;
+template <int N, bool H>
+Jet<N, H> operator*(const Jet<N, H>& a, const Jet<N, H>& b) {
+  Jet<N, H> r;
   r.v = a.v * b.v;
   r.g = a.v * b.g + b.v * a.g;
+  if constexpr (H) r.h = a.v * b.h + b.v * a.h + a.g * b.g.transpose() + b.g * a.g.transpose();
   return r;
 }
-template <int N>
-Dual<N> operator/(const Dual<N>& a, const Dual<N>& b) {
-  Dual<N> inv;
+template <int N, bool H>
+Jet<N, H> operator/(const Jet<N, H>& a, const Jet<N, H>& b) {
+  // a / b = a * (1/b); d(1/b) = -db/b^2, d2(1/b) = 2 db db^T / b^3 - d2b / b^2
+  Jet<N, H> inv;
   const double ib = 1.0 / b.v;
   inv.v = ib;
   inv.g = -ib * ib * b.g;
+  if constexpr (H) inv.h = 2 * ib * ib * ib * (b.g * b.g.transpose()) - ib * ib * b.h;
   return a * inv;
 }
-template <int N>
-Dual<N> operator+(const Dual<N>& a, double b) {
-  return a + Dual<N>(b);
+template <int N, bool H>
+Jet<N, H> operator+(const Jet<N, H>& a, double b) {
+  return a + Jet<N, H>(b);
 }
-template <int N>
-Dual<N> operator-(double a, const Dual<N>& b) {
-  return Dual<N>(a) - b;
+template <int N, bool H>
+Jet<N, H> operator-(double a, const Jet<N, H>& b) {
+  return Jet<N, H>(a) - b;
 }
-template <int N>
-Dual<N> operator*(double a, const Dual<N>& b) {
-  Dual<N> r = b;
+template <int N, bool H>
+Jet<N, H> operator*(double a, const Jet<N, H>& b) {
+  Jet<N, H> r = b;
   r.v *= a;
   r.g *= a;
+  if constexpr (H) r.h *= a;
   return r;
 }
 
@@ -185,12 +140,8 @@ inline double value_of(const Taylor2& x) {
 inline double value_of(double x) {
   return x;
 }
-template <int N>
-double value_of(const Jet<N>& x) {
-  return x.v;
-}
-template <int N>
-double value_of(const Dual<N>& x) {
+template <int N, bool H>
+double value_of(const Jet<N, H>& x) {
   return x.v;
 }
 
