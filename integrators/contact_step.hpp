@@ -7,8 +7,12 @@
 // released and the (sub-)step solved again; a node closed at the start that
 // penetrates at the end (released in this sub-step, or touching) re-enters
 // for the whole sub-step at no energy cost and is kept ("pinned": no second
-// release in it). A node open at the start that penetrates at the end is an
-// impact, treated as ImpactTreatment says:
+// release in it). A node inside or apart at the start by more than the gap
+// tolerance (its function changed when the step's contact was prepared) is
+// settled first (settle_changed_functions in contact_step.cpp: apart, it is
+// released; inside, it keeps its gap where pulling it to 0 costs energy).
+// A node open at the start that penetrates at the end is an impact,
+// treated as ImpactTreatment says:
 //
 //  - Locate: the sub-step is cut at the instant tau at which the first open
 //    gap closes, and every open node whose gap is then within the gap
