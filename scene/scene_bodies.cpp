@@ -16,6 +16,10 @@ namespace emdae::scene_reader {
 // measured as the peak resident size of `emdae run` (scheme em) on a ring of
 // 10^5 elements: 1.08 GB, 10.8 KB per element (docs/reliability.md).
 constexpr double kBytesPerElement = 11 * 1024;
+// The same with linear_solver = "amg" (no factors: the hierarchy and
+// GMRES's vectors instead), measured on a square of 708 x 708 elements
+// (1 005 362 dofs): 2 762 MiB, 5.6 KiB per element (docs/performance.md §13).
+constexpr double kBytesPerElementAmg = 6 * 1024;
 
 std::string Builder::unique_name(const Fields& f, std::vector<std::string>& taken,
                                  const std::string& fallback, const char* what) const {
@@ -47,13 +51,18 @@ Mesh Builder::mesh(const Fields& f) {
 
 void Builder::charge_elements(const Fields& m, std::string_view k, double elements) {
   Scene::Estimate& e = scene_.estimate;
-  e.memory_bytes += elements * kBytesPerElement;
+  // [scheme] is read before the bodies. AMG serves em, midpoint, galpha and
+  // statics (IDA's matrices have constraint rows: they go to an LU).
+  const bool amg = settings().schemes.newton.linear_solver == KluSolver::Backend::Amg &&
+                   settings().scheme != "ida";
+  e.memory_bytes += elements * (amg ? kBytesPerElementAmg : kBytesPerElement);
   if (!(e.memory_bytes <= e.max_memory_bytes))
-    m.fail_key(k, fmt::format("{:.0f} elements make the scene need about {:.0f} MB (the model, its "
-                              "Jacobian and factors), more than limits.max_memory_mb = {:.0f} "
-                              "(raise it with --set limits.max_memory_mb=N), received {}",
-                              elements, e.memory_bytes / (1 << 20), e.max_memory_bytes / (1 << 20),
-                              show(*m.find(k))));
+    m.fail_key(k,
+               fmt::format("{:.0f} elements make the scene need about {:.0f} MB (the model, its "
+                           "Jacobian and {}), more than limits.max_memory_mb = {:.0f} "
+                           "(raise it with --set limits.max_memory_mb=N), received {}",
+                           elements, e.memory_bytes / (1 << 20), amg ? "AMG hierarchy" : "factors",
+                           e.max_memory_bytes / (1 << 20), show(*m.find(k))));
 }
 
 Mesh Builder::generated_mesh(const Fields& m) {

@@ -192,6 +192,28 @@ TEST(Reliability, MeshTooLargeForTheMemoryLimitIsRefusedBeforeItIsBuilt) {
   EXPECT_TRUE(has(r.output, "MB for the elements (limits.max_memory_mb = 4096)")) << r.output;
 }
 
+// The estimate knows the linear solver: with linear_solver = "amg" a mesh
+// costs 6 KiB per element (no factors), else 11 KiB. 8 000 elements under
+// a limit of 64 MB: 86 MB with an LU (refused), 47 MB with AMG (accepted);
+// IDA, whose matrices go to an LU whatever the key, is refused.
+TEST(Reliability, TheMemoryEstimateKnowsTheLinearSolver) {
+  const auto scene = [](const std::string& scheme) {
+    return "[limits]\nmax_memory_mb = 64\n[time]\ndt = 0.01\nt_end = 0.1\n[scheme]\n" + scheme +
+           "[[bodies]]\nname = \"b\"\n[bodies.mesh]\ntype = \"rectangle\"\n"
+           "origin = [0.0, 0.0]\nwidth = 1.0\nheight = 1.0\nnx = 100\nny = 80\n"
+           "[bodies.material]\nmodel = \"svk\"\nyoung = 1.0\npoisson = 0.1\ndensity = 1.0\n";
+  };
+  expect_refused(scene(""), {"8000 elements", "about 86 MB", "Jacobian and factors",
+                             "limits.max_memory_mb = 64"});
+  expect_refused(scene("name = \"ida\"\nlinear_solver = \"amg\"\n"), {"about 86 MB"});
+  TempDir dir;
+  const std::string path = dir.write("scene.toml", scene("linear_solver = \"amg\"\n"));
+  const Result r = emdae("check " + quote(path), dir.path());
+  EXPECT_EQ(r.code, 0) << r.output;
+  EXPECT_TRUE(has(r.output, "about 47 MB for the elements (limits.max_memory_mb = 64)"))
+      << r.output;
+}
+
 // A Gmsh file: the format, then `body`.
 std::string gmsh(const std::string& body) {
   return "$MeshFormat\n4.1 0 8\n$EndMeshFormat\n" + body;
