@@ -233,38 +233,22 @@ StepStats ContactStepper::substep(SubstepScheme& scheme, State& s, double h) {
       continue;
     }
     if (!r.converged) {
-      // Newton could not pull the nodes found inside at the start to 0:
-      // they keep their gap (settle_changed_functions), and the sub-step is
-      // solved again.
-      bool kept_inside = false;
-      for (int id : inside_)
-        if (set_.is_active(s, id) && !contains(kept_, id)) {
-          kept_.push_back(id);
-          kept_inside = true;
-        }
-      if (kept_inside) {
-        have_guess = false;
-        continue;
-      }
-    }
-    if (!r.converged) {
-      // The last resort (keep_deep_entries()): an active node that was
-      // already below -tol at the sub-step's start entered there
-      // (re-entered, or found inside by the search at the step's start,
-      // with no bracket to locate in) with target 0, and pulling it out
-      // within the sub-step was more than Newton could do, however short
-      // the step (a corner 1.2e-2 inside, tests/test_impact_sweep.cpp case
-      // 122). As at an engagement jump (locate()), it keeps its gap instead
-      // while it stays active, and the sub-step is solved again.
+      // Nodes that keep their gap instead of being pulled to 0, and the
+      // sub-step is solved again: the nodes found inside at its start
+      // (settle_changed_functions); failing those, at the smallest step
+      // allowed (the last resort, keep_deep_entries()), any active node
+      // already below -tol at its start (re-entered there with target 0),
+      // which Newton could not pull out however short the step. As at an
+      // engagement jump (locate()), such a node keeps its gap while it stays
+      // active.
       bool kept_more = false;
-      if (keep_deep_)
+      for (int id : inside_)
+        if (set_.is_active(s, id)) kept_more |= keep_gap(id);
+      if (!kept_more && keep_deep_)
         for (int id : s.active) {
           const double g = set_.gap(id, s.q);
-          if (std::isfinite(g) && g < -set_.gap_tolerance() && !set_.penalized(id) &&
-              !contains(kept_, id)) {
-            kept_.push_back(id);
-            kept_more = true;
-          }
+          if (std::isfinite(g) && g < -set_.gap_tolerance() && !set_.penalized(id))
+            kept_more |= keep_gap(id);
         }
       if (kept_more) {
         have_guess = false;
@@ -374,6 +358,12 @@ StepStats ContactStepper::substep(SubstepScheme& scheme, State& s, double h) {
 //    leaves the other body by itself within the sub-step never enters.
 // Nodes that entered open in this step's treatment, algebraic and penalized
 // nodes, and nodes that already keep their gap are left alone.
+bool ContactStepper::keep_gap(int id) {
+  if (contains(kept_, id)) return false;
+  kept_.push_back(id);
+  return true;
+}
+
 void ContactStepper::settle_changed_functions(State& s) {
   const double tol = set_.gap_tolerance();
   inside_.clear();
@@ -403,10 +393,7 @@ bool ContactStepper::keep_costly_entries(const State& s, const State& end) {
     if (energy < 0.0) energy = std::abs(measure(system_, s.q, s.v, s.t).total());
     const double work =
         std::abs(end.lambda[n_static + static_cast<Eigen::Index>(k)] * set_.gap(id, s.q));
-    if (work > kInsideWork * energy) {
-      kept_.push_back(id);
-      kept = true;
-    }
+    if (work > kInsideWork * energy) kept |= keep_gap(id);
   }
   return kept;
 }
@@ -497,7 +484,7 @@ ContactStepper::Outcome ContactStepper::locate(SubstepScheme& scheme, State& s, 
         const double g_id = set_.gap(id, sub.q);
         if (g_id > tol) continue;
         activate_candidate(sub, id);
-        if (g_id < -tol && !contains(kept_, id)) kept_.push_back(id);
+        if (g_id < -tol) keep_gap(id);
       }
       s = std::move(sub);
       accepted = r;

@@ -101,6 +101,8 @@ class ContactStepper {
   struct Point;
   enum class Outcome { Accepted, Retry, Failed };
   StepStats substep(SubstepScheme& scheme, State& s, double h);
+  // Adds id to kept_ (it keeps its gap while active); false if it was there.
+  bool keep_gap(int id);
   void settle_changed_functions(State& s);
   bool keep_costly_entries(const State& s, const State& end);
   Outcome locate(SubstepScheme& scheme, State& s, const State& end, double h,
