@@ -6,6 +6,7 @@
 #include <umfpack.h>
 
 #include <algorithm>
+#include <cmath>
 #include <stdexcept>
 #include <string>
 #include <type_traits>
@@ -68,7 +69,13 @@ struct KluSolver::Impl {
   std::vector<long> outer, inner;
   const double* values = nullptr;  // the matrix's values (UMFPACK's solve reads them)
   std::vector<double> rhs;         // the right-hand side (UMFPACK and GMRES read it)
-  SUNMatrix loaded = nullptr;      // the matrix load() filled last
+  // KLU's rows are equilibrated here, not by KLU (common.scale = -1): the
+  // loaded values are multiplied by row_scale (empty: not scaled), the row
+  // maxima's inverses, computed at each fresh factorization and kept by the
+  // refactorizations on its pivot order; load() scales while it copies.
+  std::vector<double> row_scale;
+  std::vector<double> row_work;
+  SUNMatrix loaded = nullptr;  // the matrix load() filled last
   // Backend::Amg
   Amg amg;
   std::vector<double> krylov_work;
@@ -135,9 +142,25 @@ struct KluSolver::Impl {
 
   static Impl& of(SUNLinearSolver s) { return *static_cast<Impl*>(s->content); }
 
-  // Factorization with partial pivoting on the analysed pattern.
+  // Scales the rows of the loaded matrix (already scaled by row_scale, if
+  // any) to a largest entry of 1, and row_scale with them.
+  void equilibrate(long n, const long* ap, const long* ai, double* ax) {
+    const long nnz = ap[n];
+    row_work.assign(n, 0.0);
+    for (long p = 0; p < nnz; ++p) row_work[ai[p]] = std::max(row_work[ai[p]], std::abs(ax[p]));
+    if (static_cast<long>(row_scale.size()) != n) row_scale.assign(n, 1.0);
+    for (long i = 0; i < n; ++i) {
+      row_work[i] = row_work[i] > 0.0 ? 1.0 / row_work[i] : 1.0;
+      row_scale[i] *= row_work[i];
+    }
+    for (long p = 0; p < nnz; ++p) ax[p] *= row_work[ai[p]];
+  }
+
+  // Factorization with partial pivoting on the analysed pattern, of the
+  // equilibrated matrix.
   int factor(long* ap, long* ai, double* ax) {
     free_numeric();
+    equilibrate(symbolic->n, ap, ai, ax);
     numeric = klu_l_factor(ap, ai, ax, symbolic, &common);
     if (!numeric)
       return common.status == KLU_SINGULAR ? SUNLS_LUFACT_FAIL : SUNLS_PACKAGE_FAIL_UNREC;
@@ -281,6 +304,10 @@ struct KluSolver::Impl {
     }
     N_VScale(1.0, b, x);
     const long n = N_VGetLength(x);
+    if (!row_scale.empty()) {
+      double* xp = N_VGetArrayPointer(x);
+      for (long i = 0; i < n; ++i) xp[i] *= row_scale[i];
+    }
     return klu_l_solve(symbolic, numeric, n, 1, N_VGetArrayPointer(x), &common)
                ? SUNLS_SUCCESS
                : SUNLS_PACKAGE_FAIL_REC;
@@ -340,6 +367,10 @@ KluSolver::KluSolver(SUNContext ctx, Ordering ordering, Pivoting pivoting, Backe
   // the ring impact, none at 0.1). Mass-dominated matrices pivot on their
   // diagonal either way.
   m.common.tol = 0.1;
+  // Row scaling by KluSolver itself (Impl::equilibrate), once per fresh
+  // factorization; KLU's own (scale = 2) recomputed it at every
+  // refactorization, 4.5 % of the ring impact's run (docs/performance.md §15).
+  m.common.scale = -1;
   m.shell = SUNLinSolNewEmpty(ctx);
   if (!m.shell) throw std::runtime_error("SUNLinSolNewEmpty returned NULL");
   m.shell->content = &m;
@@ -409,7 +440,17 @@ void KluSolver::load(const SparseMatrix& jac, SUNMatrix a) {
     std::copy(op, op + n + 1, SUNSparseMatrix_IndexPointers(a));
     std::copy(ip, ip + nnz, SUNSparseMatrix_IndexValues(a));
   }
-  std::copy(jac.valuePtr(), jac.valuePtr() + nnz, SUNSparseMatrix_Data(a));
+  // The values, scaled by the rows' factors while a KLU factorization on
+  // this pattern is kept (its refactorization and solves use them).
+  const double* v = jac.valuePtr();
+  double* d = SUNSparseMatrix_Data(a);
+  if (same && m.in_use == Backend::Klu && m.numeric && static_cast<long>(m.row_scale.size()) == n) {
+    const double* r = m.row_scale.data();
+    for (long p = 0; p < nnz; ++p) d[p] = v[p] * r[ip[p]];
+  } else {
+    std::copy(v, v + nnz, d);
+    m.row_scale.clear();
+  }
   m.loaded = a;
 }
 

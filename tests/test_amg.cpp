@@ -342,4 +342,43 @@ TEST(MassInverse, ConjugateGradientsAsTheFactorization) {
 }
 
 }  // namespace
+// KluSolver equilibrates KLU's rows itself (KLU's own scaling is off): a
+// matrix whose rows are scaled by 1e-6 .. 1e6 is solved to round-off after
+// its fresh factorization, and after a refactorization of other values on
+// the same pattern, which keeps the fresh one's row factors; the solution
+// is that of the right-hand side given, not of a scaled one.
+TEST(KluRows, RowsScaledOverTwelveDecadesSolveToRoundOff) {
+  SparseMatrix a = block_matrix(8);
+  const long n = a.cols();
+  Vec d(n);
+  for (long i = 0; i < n; ++i) d[i] = std::pow(10.0, 6.0 * std::sin(1.3 * double(i)));
+  a = d.asDiagonal() * a;
+  const auto ctx = sundials::make_context();
+  KluSolver solver(ctx.get(), KluSolver::Ordering::Amd, KluSolver::Pivoting::Kept,
+                   KluSolver::Backend::Klu);
+  SUNMatrix m = SUNSparseMatrix(n, n, a.nonZeros(), CSC_MAT, ctx.get());
+  Vec exact(n), b(n), x(n);
+  for (long i = 0; i < n; ++i) exact[i] = std::cos(0.37 * double(i)) + 0.5;
+  N_Vector nb = N_VMake_Serial(n, b.data(), ctx.get());
+  N_Vector nx = N_VMake_Serial(n, x.data(), ctx.get());
+  const auto solve_error = [&](const SparseMatrix& j) {
+    b = j * exact;
+    solver.load(j, m);
+    EXPECT_EQ(SUNLinSolSetup(solver.get(), m), SUNLS_SUCCESS);
+    EXPECT_EQ(SUNLinSolSolve(solver.get(), m, nx, nb, 0.0), SUNLS_SUCCESS);
+    return (x - exact).cwiseAbs().maxCoeff() / exact.cwiseAbs().maxCoeff();
+  };
+  EXPECT_LE(solve_error(a), 1e-12);
+  EXPECT_EQ(solver.counters().factorizations, 1);
+  // Other values on the same pattern: the mass part doubled.
+  SparseMatrix a2 = a;
+  for (long i = 0; i < n; ++i) a2.coeffRef(i, i) *= 2.0;
+  EXPECT_LE(solve_error(a2), 1e-12);
+  EXPECT_EQ(solver.counters().factorizations, 1);
+  EXPECT_EQ(solver.counters().refactorizations, 1);
+  N_VDestroy(nb);
+  N_VDestroy(nx);
+  SUNMatDestroy(m);
+}
+
 }  // namespace emdae

