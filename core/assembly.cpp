@@ -146,23 +146,29 @@ long slot_of(const std::vector<long>& outer, const std::vector<long>& inner_indi
 
 }  // namespace
 
-// The pattern, column by column: the rows of every potential term's block
-// (free rows) and of the triplets, and with_mass_ M's free rows, sorted and
-// merged. Built straight into compressed columns: a triplet list of the
-// same entries (with their duplicates: four elements share a node) would
-// take 24 bytes an entry and setFromTriplets another copy, about 1.5 kB per
-// dof at its peak, where this takes 8 bytes a listed row.
-void JacobianPattern::build_pattern(const System& s, long size) {
+// The base pattern, column by column: the rows of every potential term's
+// block (free rows) and with_mass M's free rows, sorted and merged. Built
+// straight into compressed columns: a triplet list of the same entries
+// (with their duplicates: four elements share a node) would take 24 bytes
+// an entry and setFromTriplets another copy, about 1.5 kB per dof at its
+// peak, where this takes 8 bytes a listed row.
+void JacobianPattern::release_base() {
+  for (auto* v : {&base_outer_, &base_inner_, &base_potential_slots_, &base_mass_slots_, &moved_})
+    std::vector<long>().swap(*v);
+  base_system_ = nullptr;
+}
+
+void JacobianPattern::build_base(const System& s, bool with_mass) {
   const auto& fixed = s.is_prescribed();
   const SparseMatrix& m = s.mass();
+  const long size = s.n_dofs();
   std::vector<long> start(static_cast<std::size_t>(size) + 1, 0);
   for (const auto& term : s.potentials()) {
     long free_rows = 0;
     for (int r : term->dofs()) free_rows += fixed[static_cast<std::size_t>(r)] ? 0 : 1;
     for (int c : term->dofs()) start[static_cast<std::size_t>(c) + 1] += free_rows;
   }
-  for (long c : cols_) ++start[static_cast<std::size_t>(c) + 1];
-  if (with_mass_)
+  if (with_mass)
     for (long c = 0; c < m.outerSize(); ++c)
       start[static_cast<std::size_t>(c) + 1] += m.outerIndexPtr()[c + 1] - m.outerIndexPtr()[c];
   for (long c = 0; c < size; ++c)
@@ -174,9 +180,7 @@ void JacobianPattern::build_pattern(const System& s, long size) {
       for (int r : term->dofs())
         if (!fixed[static_cast<std::size_t>(r)])
           listed[static_cast<std::size_t>(next[static_cast<std::size_t>(c)]++)] = r;
-  for (std::size_t k = 0; k < cols_.size(); ++k)
-    listed[static_cast<std::size_t>(next[static_cast<std::size_t>(cols_[k])]++)] = rows_[k];
-  if (with_mass_)
+  if (with_mass)
     for (long c = 0; c < m.outerSize(); ++c)
       for (SparseMatrix::InnerIterator it(m, c); it; ++it)
         if (!fixed[static_cast<std::size_t>(it.row())])
@@ -191,14 +195,89 @@ void JacobianPattern::build_pattern(const System& s, long size) {
     next[static_cast<std::size_t>(c)] = end - listed.data();
     nnz += end - begin;
   }
-  outer_.assign(static_cast<std::size_t>(size) + 1, 0);
-  inner_.resize(static_cast<std::size_t>(nnz));
+  base_outer_.assign(static_cast<std::size_t>(size) + 1, 0);
+  base_inner_.resize(static_cast<std::size_t>(nnz));
   for (long c = 0; c < size; ++c) {
     const long* begin = listed.data() + start[static_cast<std::size_t>(c)];
     const long* end = listed.data() + next[static_cast<std::size_t>(c)];
-    std::copy(begin, end, inner_.begin() + outer_[static_cast<std::size_t>(c)]);
-    outer_[static_cast<std::size_t>(c) + 1] = outer_[static_cast<std::size_t>(c)] + (end - begin);
+    std::copy(begin, end, base_inner_.begin() + base_outer_[static_cast<std::size_t>(c)]);
+    base_outer_[static_cast<std::size_t>(c) + 1] =
+        base_outer_[static_cast<std::size_t>(c)] + (end - begin);
   }
+  std::vector<long>().swap(listed);
+  base_potential_slots_.clear();
+  std::size_t blocks = 0;
+  for (const auto& term : s.potentials()) blocks += term->dofs().size() * term->dofs().size();
+  base_potential_slots_.reserve(blocks);
+  for (const auto& term : s.potentials())
+    for (int c : term->dofs())
+      for (int r : term->dofs())
+        base_potential_slots_.push_back(
+            fixed[static_cast<std::size_t>(r)] ? -1 : slot_of(base_outer_, base_inner_, r, c));
+  base_mass_slots_.clear();
+  if (with_mass) {
+    base_mass_slots_.reserve(static_cast<std::size_t>(m.nonZeros()));
+    for (long c = 0; c < m.outerSize(); ++c)
+      for (SparseMatrix::InnerIterator it(m, c); it; ++it)
+        base_mass_slots_.push_back(fixed[static_cast<std::size_t>(it.row())]
+                                       ? -1
+                                       : slot_of(base_outer_, base_inner_, it.row(), c));
+  }
+  base_system_ = &s;
+  base_terms_ = s.potentials().size();
+  base_with_mass_ = with_mass;
+}
+
+// The pattern of the base and the triplets (rows_, cols_): per column, the
+// base's sorted rows merged with the triplets' (sorted, duplicates once);
+// columns past the system's dofs (multipliers) have only triplets. Then
+// the slots: the base's where its entries moved, the triplets' searched.
+void JacobianPattern::merge_triplets(long size) {
+  const long base_cols = static_cast<long>(base_outer_.size()) - 1;
+  starts_.assign(static_cast<std::size_t>(size) + 1, 0);
+  for (long c : cols_) ++starts_[static_cast<std::size_t>(c) + 1];
+  for (long c = 0; c < size; ++c)
+    starts_[static_cast<std::size_t>(c) + 1] += starts_[static_cast<std::size_t>(c)];
+  by_column_.resize(rows_.size());
+  {
+    std::vector<long> next(starts_.begin(), starts_.end() - 1);
+    for (std::size_t k = 0; k < rows_.size(); ++k)
+      by_column_[static_cast<std::size_t>(next[static_cast<std::size_t>(cols_[k])]++)] = rows_[k];
+  }
+  moved_.resize(base_inner_.size());
+  outer_.assign(static_cast<std::size_t>(size) + 1, 0);
+  inner_.clear();
+  inner_.reserve(base_inner_.size() + rows_.size());
+  for (long c = 0; c < size; ++c) {
+    long* t = by_column_.data() + starts_[static_cast<std::size_t>(c)];
+    long* t_end = by_column_.data() + starts_[static_cast<std::size_t>(c) + 1];
+    std::sort(t, t_end);
+    t_end = std::unique(t, t_end);
+    long i = c < base_cols ? base_outer_[static_cast<std::size_t>(c)] : 0;
+    const long i_end = c < base_cols ? base_outer_[static_cast<std::size_t>(c) + 1] : 0;
+    while (i < i_end || t < t_end) {
+      const long place = static_cast<long>(inner_.size());
+      if (t == t_end || (i < i_end && base_inner_[static_cast<std::size_t>(i)] <= *t)) {
+        const long row = base_inner_[static_cast<std::size_t>(i)];
+        if (t != t_end && *t == row) ++t;
+        moved_[static_cast<std::size_t>(i++)] = place;
+        inner_.push_back(row);
+      } else {
+        inner_.push_back(*t++);
+      }
+    }
+    outer_[static_cast<std::size_t>(c) + 1] = static_cast<long>(inner_.size());
+  }
+  slots_.resize(rows_.size());
+  for (std::size_t k = 0; k < rows_.size(); ++k)
+    slots_[k] = slot_of(outer_, inner_, rows_[k], cols_[k]);
+  const auto move = [&](const std::vector<long>& from, std::vector<long>& to) {
+    to.resize(from.size());
+    for (std::size_t k = 0; k < from.size(); ++k)
+      to[k] = from[k] < 0 ? -1 : moved_[static_cast<std::size_t>(from[k])];
+  };
+  move(base_potential_slots_, potential_slots_);
+  move(base_mass_slots_, mass_slots_);
 }
 
 bool JacobianPattern::prepare(const Triplets& t, const System& s, long size, SparseMatrix& j,
@@ -216,29 +295,28 @@ bool JacobianPattern::prepare(const Triplets& t, const System& s, long size, Spa
       rows_[k] = t[k].row();
       cols_[k] = t[k].col();
     }
-    build_pattern(s, size);
-    slots_.resize(t.size());
-    for (std::size_t k = 0; k < t.size(); ++k)
-      slots_[k] = slot_of(outer_, inner_, rows_[k], cols_[k]);
-    const auto& fixed = s.is_prescribed();
-    potential_slots_.clear();
-    std::size_t listed = 0;
-    for (const auto& term : s.potentials()) listed += term->dofs().size() * term->dofs().size();
-    potential_slots_.reserve(listed);
-    for (const auto& term : s.potentials())
-      for (int c : term->dofs())
-        for (int r : term->dofs())
-          potential_slots_.push_back(
-              fixed[static_cast<std::size_t>(r)] ? -1 : slot_of(outer_, inner_, r, c));
-    mass_slots_.clear();
-    if (with_mass_) {
-      const SparseMatrix& m = s.mass();
-      mass_slots_.reserve(static_cast<std::size_t>(m.nonZeros()));
-      for (long c = 0; c < m.outerSize(); ++c)
-        for (SparseMatrix::InnerIterator it(m, c); it; ++it)
-          mass_slots_.push_back(fixed[static_cast<std::size_t>(it.row())]
-                                    ? -1
-                                    : slot_of(outer_, inner_, it.row(), c));
+    if (size < s.n_dofs())
+      throw std::logic_error("JacobianPattern: a Jacobian smaller than the system's dofs");
+    if (base_system_ != &s || base_terms_ != s.potentials().size() ||
+        base_with_mass_ != with_mass || static_cast<long>(base_outer_.size()) != s.n_dofs() + 1)
+      build_base(s, with_mass);
+    if (s.n_dofs() <= kept_base_dofs_) {
+      merge_triplets(size);
+    } else if (rows_.empty() && size == s.n_dofs()) {
+      // A large base is not kept beside the pattern (about 0.4 kB per dof):
+      // without triplets it is the pattern, handed over (a large mesh
+      // without constraints keeps one copy of its slots), and with them it
+      // is released after the merge; the next triplet sequence builds it
+      // again.
+      outer_.swap(base_outer_);
+      inner_.swap(base_inner_);
+      potential_slots_.swap(base_potential_slots_);
+      mass_slots_.swap(base_mass_slots_);
+      slots_.clear();
+      release_base();
+    } else {
+      merge_triplets(size);
+      release_base();
     }
   }
   // j may have been handed another matrix since (or be new): give it the

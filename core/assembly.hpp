@@ -88,6 +88,11 @@ class Assembler {
 /// size) rebuilds it; a list with the same one reuses it.
 class JacobianPattern {
  public:
+  /// The base (below) is kept between triplet sequences for systems of up
+  /// to `kept_base_dofs` dofs; larger ones build it again at each new
+  /// sequence rather than hold it beside the pattern.
+  explicit JacobianPattern(long kept_base_dofs = 200000) : kept_base_dofs_(kept_base_dofs) {}
+
   /// Makes `j` (size x size) the pattern of `t` plus the potential blocks of
   /// `s` (and, with `with_mass`, the mass matrix's entries in free rows), all
   /// values zero; rebuilds the slots when t's sequence, the size or
@@ -105,7 +110,9 @@ class JacobianPattern {
   long rebuilds() const { return rebuilds_; }
 
  private:
-  void build_pattern(const System& s, long size);
+  void build_base(const System& s, bool with_mass);
+  void release_base();
+  void merge_triplets(long size);
 
   long size_ = -1;
   bool with_mass_ = false;
@@ -113,6 +120,19 @@ class JacobianPattern {
   std::vector<long> slots_, potential_slots_, mass_slots_;
   std::vector<long> outer_, inner_;  // the pattern, compressed columns
   long rebuilds_ = 0;
+  // The base: the potential blocks' and (with_mass) M's entries in free
+  // rows, over the system's dofs, with their slots in it. It does not
+  // change with the triplets (an active set, a contact search), so a new
+  // triplet sequence merges its entries into it, and each base slot moves
+  // to its place in the merged pattern, without sorting or searching the
+  // base again.
+  long kept_base_dofs_;
+  const System* base_system_ = nullptr;
+  std::size_t base_terms_ = 0;
+  bool base_with_mass_ = false;
+  std::vector<long> base_outer_, base_inner_, base_potential_slots_, base_mass_slots_;
+  std::vector<long> moved_;               // the merged slot of each base entry
+  std::vector<long> by_column_, starts_;  // work: the triplets' rows by column
 };
 
 }  // namespace emdae

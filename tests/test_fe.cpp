@@ -701,6 +701,68 @@ TEST(Assembly, SlotMapJacobianEqualsTriplets) {
   EXPECT_EQ(mass_pattern.rebuilds(), 6);
 }
 
+// The slots through changing triplet sequences around the kept base (the
+// potential blocks and M): constraint rows and columns past the dofs (a
+// Jacobian of size n + m), entries inside and outside the elements' pattern,
+// sequences that come back, and none at all (the base alone); each matrix
+// equals setFromTriplets of the same entries, pattern and values.
+TEST(Assembly, SlotsFollowTheTripletsAroundTheKeptBase) {
+  System s(2);
+  add_body(s, rectangle_mesh(Eigen::Vector2d::Zero(), 2.0, 1.0, 4, 2),
+           paper_material(MaterialModel::SaintVenantKirchhoff));
+  s.fix_node(3);
+  const int n = s.n_dofs();
+  Vec q0 = s.initial_positions(), q1 = q0;
+  for (int i = 0; i < n; ++i) q1[i] += 0.01 * std::sin(1.7 * i);
+  Assembler assembler(s);
+  // Kept (a small system), and built again at each sequence (as a large one).
+  for (const long kept : {100000L, 0L}) {
+    JacobianPattern pattern(kept);
+    SparseMatrix j;
+    // A constraint row (and its column) coupling dofs a and b.
+    const auto constraint = [&](Triplets& t, int row, int a, int b) {
+      for (int d : {a, b}) {
+        t.emplace_back(row, d, 0.5 + d);
+        t.emplace_back(d, row, 0.5 + d);
+      }
+    };
+    const std::vector<std::pair<int, std::vector<std::array<int, 2>>>> sequences = {
+        {n + 1, {{0, n - 1}}},          // one row, far apart dofs (outside the elements)
+        {n + 2, {{2, 3}, {n - 2, 1}}},  // two rows
+        {n, {}},                        // none: the base alone
+        {n + 1, {{0, n - 1}}},          // the first again
+        {n + 2, {{n - 1, 0}, {4, 5}}},  // two rows, other dofs
+    };
+    for (const auto& [size, rows] : sequences) {
+      Triplets t;
+      for (std::size_t k = 0; k < rows.size(); ++k)
+        constraint(t, n + static_cast<int>(k), rows[k][0], rows[k][1]);
+      pattern.prepare(t, s, size, j, true);
+      pattern.scatter_mass(s, 3.0, j);
+      pattern.scatter(t, j);
+      assembler.add_potential_jacobian(GradientKind::Discrete, q0, q1, 0.0, 1.0, j.valuePtr(),
+                                       pattern.potential_slots());
+      Triplets all;
+      assembler.add_mass(all, 3.0);
+      all.insert(all.end(), t.begin(), t.end());
+      Vec f = Vec::Zero(n);
+      assembler.add_potential_forces(GradientKind::Discrete, q0, q1, 0.0, 1.0, f, &all);
+      SparseMatrix reference(size, size);
+      reference.setFromTriplets(all.begin(), all.end());
+      reference.makeCompressed();
+      ASSERT_EQ(j.rows(), size);
+      ASSERT_EQ(j.nonZeros(), reference.nonZeros()) << size;
+      EXPECT_TRUE(
+          std::equal(j.outerIndexPtr(), j.outerIndexPtr() + size + 1, reference.outerIndexPtr()));
+      EXPECT_TRUE(std::equal(j.innerIndexPtr(), j.innerIndexPtr() + j.nonZeros(),
+                             reference.innerIndexPtr()));
+      const Mat d = Mat(j) - Mat(reference);
+      EXPECT_LE(d.cwiseAbs().maxCoeff(), 1e-13 * Mat(reference).cwiseAbs().maxCoeff()) << size;
+    }
+    EXPECT_EQ(pattern.rebuilds(), 5);
+  }
+}
+
 // --- mass ----------------------------------------------------------------------
 
 // Consistent mass (paper eq. (13)) of a ring and a rectangle: total mass
