@@ -62,6 +62,7 @@ struct KluSolver::Impl {
   klu_l_numeric* numeric = nullptr;
   bool pattern_changed = true;
   double rcond_fresh = 0.0;
+  double flops_per_unknown = 0.0;  // of the last analysis (KLU's AMD estimate)
   long last_flag = SUNLS_SUCCESS;
   Counters counters;
   // The pattern loaded last, copied for a matrix that is not kept
@@ -186,11 +187,14 @@ struct KluSolver::Impl {
       // Forced AMG where it applies; Auto asks KLU's analysis first.
       bool take_amg = backend == Backend::Amg && Amg::applies(n, ap, ai, ax, 2);
       in_use = backend == Backend::Umfpack ? Backend::Umfpack : Backend::Klu;
+      flops_per_unknown = 0.0;
       if (!take_amg && in_use == Backend::Klu) {
         symbolic = klu_l_analyze(n, ap, ai, &common);
         if (!symbolic) return SUNLS_PACKAGE_FAIL_UNREC;
+        if (backend == Backend::Auto || common.ordering == static_cast<int>(Ordering::Amd))
+          flops_per_unknown = estimated_flops(n, ap, ai) / double(n);
         if (backend == Backend::Auto) {
-          const double flops = estimated_flops(n, ap, ai) / double(n);
+          const double flops = flops_per_unknown;
           take_amg = flops >= kAmgFlops && Amg::applies(n, ap, ai, ax, 2);
           if (take_amg || flops >= umfpack_flops) free_symbolic();
           if (!take_amg && flops >= umfpack_flops) in_use = Backend::Umfpack;
@@ -400,6 +404,10 @@ const KluSolver::Counters& KluSolver::counters() const {
 
 KluSolver::Backend KluSolver::backend_in_use() const {
   return impl_->in_use;
+}
+
+double KluSolver::flops_per_unknown() const {
+  return impl_->flops_per_unknown;
 }
 
 void KluSolver::load(const SparseMatrix& jac, SUNMatrix a) {

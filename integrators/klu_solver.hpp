@@ -149,6 +149,9 @@ class KluSolver {
   const Counters& counters() const;
   /// The backend the last analysis chose (Klu, Umfpack or Amg; Auto before any).
   Backend backend_in_use() const;
+  /// KLU's estimate (AMD ordering) of a factorization's flops per unknown on
+  /// the pattern analysed last; 0 before any analysis.
+  double flops_per_unknown() const;
 
  private:
   struct Impl;

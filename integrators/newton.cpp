@@ -79,12 +79,8 @@ struct NewtonSolver::Impl {
     // Newton (jacobian_reuse 1): a fresh Jacobian at every iteration.
     // Modified Newton: one serves up to jacobian_reuse iterations while each
     // iteration cuts the residual by reuse_contraction.
-    check(KINSetMaxSetupCalls(kin.get(), std::max(1, s.jacobian_reuse)), "KINSetMaxSetupCalls");
-    if (s.jacobian_reuse > 1) {
-      check(KINSetNoResMon(kin.get(), SUNFALSE), "KINSetNoResMon");
-      check(KINSetMaxSubSetupCalls(kin.get(), 1), "KINSetMaxSubSetupCalls");
-      check(KINSetResMonConstValue(kin.get(), s.reuse_contraction), "KINSetResMonConstValue");
-    }
+    reuse = 0;
+    set_reuse(std::max(1, s.jacobian_reuse), s);
     check(KINSetNumMaxIters(kin.get(), s.max_iterations), "KINSetNumMaxIters");
     // A step stalled at round-off ends the iteration; the result is then
     // accepted if its residual meets `tolerance` (a tolerance below the
@@ -96,6 +92,50 @@ struct NewtonSolver::Impl {
     // EMDAE_KINSOL_PRINT=1|2|3 shows KINSOL's own iteration log (on stdout).
     const char* print = std::getenv("EMDAE_KINSOL_PRINT");
     check(KINSetPrintLevel(kin.get(), print ? std::atoi(print) : 0), "KINSetPrintLevel");
+  }
+
+  // jacobian_reuse = auto where a factorization is costly: reuse, watched
+  // over windows of kAutoWindow solves; a window that needed
+  // kAutoRenewals Jacobians or more per solve (reused ones did not carry
+  // the solves, the residual monitoring renewed them) goes back to Newton's
+  // method for kAutoNewtonSolves solves, then reuse is tried again.
+  static constexpr long kAutoWindow = 20;
+  static constexpr double kAutoRenewals = 1.5;
+  static constexpr long kAutoNewtonSolves = 100;
+  long window_solves = 0, window_jacobians = 0, newton_left = 0;
+  long jacobian_evaluations = 0;  // by jacobian_cb, over all solves
+
+  int auto_reuse(const NewtonSettings& s) {
+    if (klu->flops_per_unknown() < s.reuse_flops_per_unknown) return 1;
+    if (newton_left > 0) {
+      --newton_left;
+      return 1;
+    }
+    return NewtonSettings::kAutoReuseCount;
+  }
+
+  void watch_reuse(long jacobians) {
+    if (reuse <= 1) return;
+    ++window_solves;
+    window_jacobians += jacobians;
+    if (window_solves < kAutoWindow) return;
+    if (window_jacobians >= kAutoRenewals * double(window_solves)) newton_left = kAutoNewtonSolves;
+    window_solves = window_jacobians = 0;
+  }
+
+  // How many iterations a Jacobian serves (KINSOL's max setup calls), with
+  // the residual monitoring that renews it where it is > 1.
+  int reuse = 0;
+  void set_reuse(int count, const NewtonSettings& s) {
+    if (count == reuse) return;
+    reuse = count;
+    check(KINSetMaxSetupCalls(kin.get(), count), "KINSetMaxSetupCalls");
+    // (With a set-up at every iteration the monitoring changes nothing.)
+    if (count > 1) {
+      check(KINSetNoResMon(kin.get(), SUNFALSE), "KINSetNoResMon");
+      check(KINSetMaxSubSetupCalls(kin.get(), 1), "KINSetMaxSubSetupCalls");
+      check(KINSetResMonConstValue(kin.get(), s.reuse_contraction), "KINSetResMonConstValue");
+    }
   }
 
   static void error_cb(int, const char* module, const char* function, char* msg, void* data) {
@@ -123,6 +163,7 @@ struct NewtonSolver::Impl {
     auto* self = static_cast<Impl*>(data);
     try {
       const auto len = N_VGetLength(uu);
+      ++self->jacobian_evaluations;
       self->x = Eigen::Map<const Vec>(N_VGetArrayPointer(uu), len);
       self->problem->jacobian(self->x, self->jac);
       self->jac.makeCompressed();
@@ -140,6 +181,8 @@ NewtonSolver::NewtonSolver(NewtonSettings settings)
   if (!(settings_.tolerance > 0)) throw std::invalid_argument("Newton tolerance must be positive");
   if (settings_.max_iterations < 1)
     throw std::invalid_argument("Newton max_iterations must be >= 1");
+  if (settings_.jacobian_reuse < 0)
+    throw std::invalid_argument("Newton jacobian_reuse must be >= 1, or 0 (auto)");
 }
 NewtonSolver::~NewtonSolver() = default;
 NewtonSolver::NewtonSolver(NewtonSolver&&) noexcept = default;
@@ -166,6 +209,9 @@ NewtonResult NewtonSolver::solve(NewtonProblem& problem, Vec& x, const Vec& resi
   Eigen::Map<Vec>(N_VGetArrayPointer(m.u.get()), n) = x;
   Eigen::Map<Vec>(N_VGetArrayPointer(m.fscale.get()), n) = residual_scale;
 
+  const bool auto_reuse = settings_.jacobian_reuse == NewtonSettings::kAutoReuse;
+  if (auto_reuse) m.set_reuse(m.auto_reuse(settings_), settings_);
+  const long jacobians_before = m.jacobian_evaluations;
   const int strategy = settings_.line_search ? KIN_LINESEARCH : KIN_NONE;
   int flag = KINSol(m.kin.get(), m.u.get(), strategy, m.uscale.get(), m.fscale.get());
   if (m.error) {
@@ -213,6 +259,7 @@ NewtonResult NewtonSolver::solve(NewtonProblem& problem, Vec& x, const Vec& resi
   }
   m.problem = nullptr;
   x = Eigen::Map<const Vec>(N_VGetArrayPointer(m.u.get()), n);
+  if (auto_reuse) m.watch_reuse(m.jacobian_evaluations - jacobians_before);
 
   NewtonResult r;
   r.iterations = static_cast<int>(iters);

@@ -53,8 +53,16 @@ struct NewtonSettings {
   // dropped as soon as an iteration reduces the residual by less than
   // `reuse_contraction` (KINSOL's residual monitoring, checked every
   // iteration), and every solve starts with a fresh one.
-  int jacobian_reuse = 1;
+  // kAutoReuse (the default): kAutoReuseCount where a factorization is
+  // costly against a residual (KLU's analysis of the last pattern estimates
+  // reuse_flops_per_unknown or more flops per unknown: the bearings, 9e3 to
+  // 2e4, where 3 takes 0.71-0.74 of the CPU time; not the plate with a hole,
+  // 8e2, where it takes 1.22 of it), else 1 (docs/performance.md §12).
+  static constexpr int kAutoReuse = 0;
+  static constexpr int kAutoReuseCount = 3;
+  int jacobian_reuse = kAutoReuse;
   double reuse_contraction = 0.1;
+  double reuse_flops_per_unknown = 3e3;
 };
 
 struct NewtonResult {

@@ -156,7 +156,15 @@ void Builder::parse_scheme(const Fields& f) {
   ss.newton.tolerance = f.optional_positive("newton_tolerance").value_or(1e-10);
   ss.newton.max_iterations = static_cast<int>(f.integer_in("newton_max_iterations", 20, 1, 1000));
   ss.newton.line_search = f.boolean("line_search", false);
-  ss.newton.jacobian_reuse = static_cast<int>(f.integer_in("jacobian_reuse", 1, 1, 100));
+  // "auto" (the default) or a count: NewtonSettings::jacobian_reuse.
+  const toml::node* reuse = f.find("jacobian_reuse");
+  if (!reuse || (reuse->is_string() && *reuse->value<std::string>() == "auto"))
+    ss.newton.jacobian_reuse = NewtonSettings::kAutoReuse;
+  else if (reuse->is_string())
+    f.fail_key("jacobian_reuse",
+               "must be \"auto\" or an integer in [1, 100], received " + show(*reuse));
+  else
+    ss.newton.jacobian_reuse = static_cast<int>(f.integer_in("jacobian_reuse", 1, 1, 100));
   if (const auto solver = f.optional_string("linear_solver")) {
     const auto backend = linear_solver_from_name(*solver);
     if (!backend)

@@ -194,6 +194,10 @@ std::vector<Malformed> malformed_scenes() {
        kValid + "[scheme]\njacobian_reuse = 0\n",
        "jacobian_reuse",
        {"key 'scheme.jacobian_reuse'", "received 0"}},
+      {"jacobian_reuse_word",
+       kValid + "[scheme]\njacobian_reuse = \"sometimes\"\n",
+       "jacobian_reuse",
+       {"key 'scheme.jacobian_reuse'", "\"auto\" or an integer", "received \"sometimes\""}},
       {"linear_solver_not_string",
        kValid + "[scheme]\nlinear_solver = 2\n",
        "linear_solver",
@@ -337,6 +341,7 @@ TEST(Scene, DefaultsApply) {
   EXPECT_DOUBLE_EQ(scene->settings.schemes.newton.tolerance, 1e-10);
   EXPECT_EQ(scene->settings.schemes.newton.max_iterations, 20);
   EXPECT_FALSE(scene->settings.schemes.newton.line_search);
+  EXPECT_EQ(scene->settings.schemes.newton.jacobian_reuse, NewtonSettings::kAutoReuse);
   EXPECT_EQ(scene->settings.output.every, 1);
   EXPECT_EQ(scene->settings.output.vtu_format, VtuFormat::Binary);
   EXPECT_FALSE(scene->settings.tolerances.any());
@@ -345,6 +350,15 @@ TEST(Scene, DefaultsApply) {
   EXPECT_TRUE(scene->system().potentials().empty());
   EXPECT_TRUE(scene->warnings.empty());
   EXPECT_TRUE(scene->system().initial_velocities().isZero());
+}
+
+TEST(Scene, JacobianReuseIsAutoOrACount) {
+  TempDir dir;
+  const auto word =
+      load_scene(dir.write("a.toml", kValid + "[scheme]\njacobian_reuse = \"auto\"\n"));
+  EXPECT_EQ(word->settings.schemes.newton.jacobian_reuse, NewtonSettings::kAutoReuse);
+  const auto count = load_scene(dir.write("c.toml", kValid + "[scheme]\njacobian_reuse = 3\n"));
+  EXPECT_EQ(count->settings.schemes.newton.jacobian_reuse, 3);
 }
 
 TEST(Scene, EmptyListOfSpringsIsAllowed) {
