@@ -59,6 +59,34 @@ std::unique_ptr<Model> spinning_block(int nx) {
   return model;
 }
 
+// em's steps of size dt on s with these Newton settings: each step's Newton
+// iterations, the end state, the linear solver's counts and the relative
+// energy error at the end.
+struct Steps {
+  std::vector<int> iterations;
+  State end;
+  KluSolver::Counters counters;
+  double energy_error = 0.0;
+  long total() const { return std::accumulate(iterations.begin(), iterations.end(), 0L); }
+};
+
+Steps em_steps(const System& s, const NewtonSettings& ns, int steps, double dt) {
+  EnergyMomentumStepper em(s, ns);
+  Steps out;
+  State st = initial_state(s);
+  const double h0 = measure(s, st.q, st.v, st.t).total();
+  for (int k = 0; k < steps; ++k) {
+    const StepStats stats = em.step(st, dt);
+    EXPECT_TRUE(stats.converged) << stats.message;
+    if (!stats.converged) break;
+    out.iterations.push_back(stats.iterations);
+  }
+  out.energy_error = std::abs(measure(s, st.q, st.v, st.t).total() - h0) / h0;
+  out.counters = em.klu_counters();
+  out.end = st;
+  return out;
+}
+
 struct Solved {
   GmresResult gmres;
   int levels = 0;
@@ -241,19 +269,11 @@ TEST(NewtonSolve, AmgTakesTheStepsKluTakes) {
     NewtonSettings ns{1e-10, 25, false};
     ns.linear_solver = backend;
     ns.jacobian_reuse = 1;  // Newton's method on both (auto would reuse KLU's)
-    EnergyMomentumStepper em(s, ns);
-    State st = initial_state(s);
-    const double h0 = measure(s, st.q, st.v, st.t).total();
-    iterations.emplace_back();
-    for (int k = 0; k < 12; ++k) {
-      const StepStats stats = em.step(st, dt);
-      ASSERT_TRUE(stats.converged) << stats.message;
-      iterations.back().push_back(stats.iterations);
-    }
-    EXPECT_LE(std::abs(measure(s, st.q, st.v, st.t).total() - h0) / h0, 1e-12);
-    const KluSolver::Counters c = em.klu_counters();
-    long its = 0;
-    for (int i : iterations.back()) its += i;
+    const Steps r = em_steps(s, ns, 12, dt);
+    ASSERT_EQ(r.iterations.size(), 12u);
+    EXPECT_LE(r.energy_error, 1e-12);
+    const KluSolver::Counters& c = r.counters;
+    const long its = r.total();
     if (backend == KluSolver::Backend::Amg) {
       EXPECT_EQ(c.krylov_solves, its);
       EXPECT_GE(c.amg_setups, 1);
@@ -263,7 +283,8 @@ TEST(NewtonSolve, AmgTakesTheStepsKluTakes) {
       std::printf("  AMG: %ld Newton iterations, %ld hierarchies, %.1f GMRES iterations each\n",
                   its, c.amg_setups, double(c.krylov_iterations) / double(c.krylov_solves));
     }
-    ends.push_back(st);
+    iterations.push_back(r.iterations);
+    ends.push_back(r.end);
   }
   EXPECT_EQ(iterations[1], iterations[0]);
   EXPECT_GE(iterations[0].front(), 2);  // Newton has work to do
@@ -354,48 +375,42 @@ TEST(MassInverse, ConjugateGradientsAsTheFactorization) {
 // instead of 2), so after the first window the steps go back to Newton's
 // method; energy as Newton's (1e-12).
 TEST(NewtonSolve, AutoReusesJacobiansOnlyWhereTheyCarryTheSolves) {
-  const double dt = 0.01;
   for (const int nx : {40, 6}) {
     const auto model = spinning_block(nx);
-    const System& s = model->system();
-    std::vector<std::vector<int>> iterations;
-    std::vector<State> ends;
-    std::vector<long> setups;
+    std::vector<Steps> r;
     for (const int reuse : {NewtonSettings::kAutoReuse, 1}) {
       NewtonSettings ns{1e-10, 25, false};
       ns.linear_solver = KluSolver::Backend::Klu;
       ns.jacobian_reuse = reuse;
-      EnergyMomentumStepper em(s, ns);
-      State st = initial_state(s);
-      const double h0 = measure(s, st.q, st.v, st.t).total();
-      iterations.emplace_back();
-      for (int k = 0; k < 40; ++k) {
-        const StepStats stats = em.step(st, dt);
-        ASSERT_TRUE(stats.converged) << stats.message;
-        iterations.back().push_back(stats.iterations);
-      }
-      EXPECT_LE(std::abs(measure(s, st.q, st.v, st.t).total() - h0) / h0, 1e-12);
-      const KluSolver::Counters c = em.klu_counters();
-      setups.push_back(c.factorizations + c.refactorizations);
-      ends.push_back(st);
+      r.push_back(em_steps(model->system(), ns, 40, 0.01));
+      ASSERT_EQ(r.back().iterations.size(), 40u);
+      EXPECT_LE(r.back().energy_error, 1e-12);
     }
+    const auto setups = [](const Steps& x) {
+      return x.counters.factorizations + x.counters.refactorizations;
+    };
     const auto sum = [](const std::vector<int>& v, int from, int to) {
       return std::accumulate(v.begin() + from, v.begin() + to, 0);
     };
-    EXPECT_EQ(setups[1], sum(iterations[1], 0, 40));
+    const auto& [automatic, newton] = std::tie(r[0], r[1]);
+    EXPECT_EQ(setups(newton), newton.total());
     std::printf("  %d x %d: auto %d + %d iterations, %ld set-ups; Newton %d + %d, %ld\n", nx, nx,
-                sum(iterations[0], 0, 20), sum(iterations[0], 20, 40), setups[0],
-                sum(iterations[1], 0, 20), sum(iterations[1], 20, 40), setups[1]);
-    EXPECT_LE((ends[0].q - ends[1].q).cwiseAbs().maxCoeff(), 1e-9);
+                sum(automatic.iterations, 0, 20), sum(automatic.iterations, 20, 40),
+                setups(automatic), sum(newton.iterations, 0, 20), sum(newton.iterations, 20, 40),
+                setups(newton));
+    EXPECT_LE((automatic.end.q - newton.end.q).cwiseAbs().maxCoeff(), 1e-9);
     if (nx == 40) {
       // Step 0 has no analysis yet (Newton's method); steps 1-20 reuse.
-      EXPECT_GT(sum(iterations[0], 0, 21), sum(iterations[1], 0, 21));
-      EXPECT_EQ(setups[0], setups[1]);  // reuse saved no Jacobian here
-      for (int k = 21; k < 40; ++k) EXPECT_EQ(iterations[0][k], iterations[1][k]) << k;
+      EXPECT_GT(sum(automatic.iterations, 0, 21), sum(newton.iterations, 0, 21));
+      EXPECT_EQ(setups(automatic), setups(newton));  // reuse saved no Jacobian here
+      for (int k = 21; k < 40; ++k)
+        EXPECT_EQ(automatic.iterations[static_cast<std::size_t>(k)],
+                  newton.iterations[static_cast<std::size_t>(k)])
+            << k;
     } else {
-      EXPECT_EQ(iterations[0], iterations[1]);
-      EXPECT_EQ(setups[0], setups[1]);
-      EXPECT_EQ(ends[0].q, ends[1].q);
+      EXPECT_EQ(automatic.iterations, newton.iterations);
+      EXPECT_EQ(setups(automatic), setups(newton));
+      EXPECT_EQ(automatic.end.q, newton.end.q);
     }
   }
 }
