@@ -124,6 +124,10 @@ struct KluSolver::Impl {
     }
     ++counters.factorizations;
     ++counters.umfpack_factorizations;
+    // A pattern UMFPACK factors without KLU's analysis (forced, or AMG's
+    // fallback): its own count of the factorization's flops stands in.
+    if (flops_per_unknown == 0.0 && n_in_use > 0)
+      flops_per_unknown = umf_info[UMFPACK_FLOPS] / double(n_in_use);
     return SUNLS_SUCCESS;
   }
 

@@ -150,7 +150,8 @@ class KluSolver {
   /// The backend the last analysis chose (Klu, Umfpack or Amg; Auto before any).
   Backend backend_in_use() const;
   /// KLU's estimate (AMD ordering) of a factorization's flops per unknown on
-  /// the pattern analysed last; 0 before any analysis.
+  /// the pattern analysed last (UMFPACK's count where it factors a pattern
+  /// KLU did not analyse); 0 before any analysis, and for AMG.
   double flops_per_unknown() const;
 
  private:

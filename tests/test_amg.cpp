@@ -413,6 +413,26 @@ TEST(NewtonSolve, AutoReusesJacobiansOnlyWhereTheyCarryTheSolves) {
       EXPECT_EQ(automatic.end.q, newton.end.q);
     }
   }
+  // The cost read off each LU: KLU's estimate, and UMFPACK's own count where
+  // KLU analysed nothing (forced "umfpack"); the 40 x 40 block is above the
+  // threshold with both, the 6 x 6 below.
+  const auto ctx = sundials::make_context();
+  for (const auto backend : {KluSolver::Backend::Klu, KluSolver::Backend::Umfpack})
+    for (const int nx : {40, 6}) {
+      const SparseMatrix a = block_matrix(nx);
+      KluSolver lu(ctx.get(), KluSolver::Ordering::Amd, KluSolver::Pivoting::Kept, backend);
+      SUNMatrix m = SUNSparseMatrix(a.rows(), a.cols(), a.nonZeros(), CSC_MAT, ctx.get());
+      EXPECT_EQ(lu.flops_per_unknown(), 0.0);
+      lu.load(a, m);
+      ASSERT_EQ(SUNLinSolSetup(lu.get(), m), SUNLS_SUCCESS);
+      const double threshold = NewtonSettings{}.reuse_flops_per_unknown;
+      if (nx == 40)
+        EXPECT_GE(lu.flops_per_unknown(), threshold) << static_cast<int>(backend);
+      else
+        EXPECT_LT(lu.flops_per_unknown(), threshold) << static_cast<int>(backend);
+      EXPECT_GT(lu.flops_per_unknown(), 0.0);
+      SUNMatDestroy(m);
+    }
 }
 
 // KluSolver equilibrates KLU's rows itself (KLU's own scaling is off): a
