@@ -152,12 +152,6 @@ long slot_of(const std::vector<long>& outer, const std::vector<long>& inner_indi
 // (with their duplicates: four elements share a node) would take 24 bytes
 // an entry and setFromTriplets another copy, about 1.5 kB per dof at its
 // peak, where this takes 8 bytes a listed row.
-void JacobianPattern::release_base() {
-  for (auto* v : {&base_outer_, &base_inner_, &base_potential_slots_, &base_mass_slots_, &moved_})
-    std::vector<long>().swap(*v);
-  base_system_ = nullptr;
-}
-
 void JacobianPattern::build_base(const System& s, bool with_mass) {
   const auto& fixed = s.is_prescribed();
   const SparseMatrix& m = s.mass();
@@ -226,6 +220,13 @@ void JacobianPattern::build_base(const System& s, bool with_mass) {
   base_system_ = &s;
   base_terms_ = s.potentials().size();
   base_with_mass_ = with_mass;
+}
+
+// Frees the base (a large system's, not kept beside the pattern).
+void JacobianPattern::release_base() {
+  for (auto* v : {&base_outer_, &base_inner_, &base_potential_slots_, &base_mass_slots_, &moved_})
+    std::vector<long>().swap(*v);
+  base_system_ = nullptr;
 }
 
 // The pattern of the base and the triplets (rows_, cols_): per column, the

@@ -198,10 +198,9 @@ struct KluSolver::Impl {
         if (backend == Backend::Auto || common.ordering == static_cast<int>(Ordering::Amd))
           flops_per_unknown = estimated_flops(n, ap, ai) / double(n);
         if (backend == Backend::Auto) {
-          const double flops = flops_per_unknown;
-          take_amg = flops >= kAmgFlops && Amg::applies(n, ap, ai, ax, 2);
-          if (take_amg || flops >= umfpack_flops) free_symbolic();
-          if (!take_amg && flops >= umfpack_flops) in_use = Backend::Umfpack;
+          take_amg = flops_per_unknown >= kAmgFlops && Amg::applies(n, ap, ai, ax, 2);
+          if (take_amg || flops_per_unknown >= umfpack_flops) free_symbolic();
+          if (!take_amg && flops_per_unknown >= umfpack_flops) in_use = Backend::Umfpack;
         }
       }
       if (take_amg) {
