@@ -15,7 +15,7 @@
 // and the relative residual |A x - b| / |b| of that solve, with KLU's own
 // estimate, from its symbolic analysis alone, of the factor's entries per
 // unknown ((lnz + unz) / n) and flops per unknown. This is what
-// Backend::Auto's rules (KluSolver::kUmfpackFlops, kAmgFlops) were chosen
+// Backend::Auto's rules (KluSolver::default_umfpack_flops(), kAmgFlops) were chosen
 // from.
 //
 //   bench_linear_solvers [MESH ...]   (default 16 50 100 160 224 316)

@@ -44,7 +44,7 @@ struct IdaSettings {
   double gap_tolerance = 0.0;
   // The sparse LU of the iteration matrix (integrators/klu_solver.hpp).
   KluSolver::Backend linear_solver = KluSolver::Backend::Auto;
-  double umfpack_flops = KluSolver::kUmfpackFlops;
+  double umfpack_flops = KluSolver::default_umfpack_flops();
 };
 
 /// A consistent start of the mechanical DAE at (t, q, v):

@@ -1,5 +1,6 @@
 #include "integrators/klu_solver.hpp"
 
+#include <dlfcn.h>
 #include <klu.h>
 #include <nvector/nvector_serial.h>
 #include <sunmatrix/sunmatrix_sparse.h>
@@ -51,7 +52,7 @@ struct KluSolver::Impl {
   SUNLinearSolver shell = nullptr;
   Pivoting pivoting = Pivoting::Kept;
   Backend backend = Backend::Klu;  // as asked
-  double umfpack_flops = kUmfpackFlops;
+  double umfpack_flops = kUmfpackFlopsReferenceBlas;
   Backend in_use = Backend::Auto;  // as chosen at the last analysis
   void* umf_symbolic = nullptr;
   void* umf_numeric = nullptr;
@@ -350,6 +351,35 @@ struct KluSolver::Impl {
     return SUNLS_SUCCESS;
   }
 };
+
+bool KluSolver::openblas_loaded() {
+  // UMFPACK's dense kernels are the dgemm_ its own object binds to:
+  // libblas.so.3 through Debian's alternatives, the reference BLAS or
+  // OpenBLAS's (which pulls in libopenblas.so.0). Look it up from UMFPACK's
+  // object (dlsym on its handle searches it and its dependencies, as a
+  // Python extension loaded RTLD_LOCAL would), then ask the object that
+  // defines it, with its own dependencies, for an OpenBLAS entry point.
+  static const bool loaded = [] {
+    Dl_info info;
+    if (!dladdr(reinterpret_cast<void*>(&umfpack_dl_symbolic), &info) || !info.dli_fname)
+      return false;
+    void* umfpack = dlopen(info.dli_fname, RTLD_LAZY | RTLD_NOLOAD);
+    if (!umfpack) return false;
+    void* dgemm = dlsym(umfpack, "dgemm_");
+    dlclose(umfpack);
+    if (!dgemm || !dladdr(dgemm, &info) || !info.dli_fname) return false;
+    void* blas = dlopen(info.dli_fname, RTLD_LAZY | RTLD_NOLOAD);
+    if (!blas) return false;
+    const bool has = dlsym(blas, "openblas_get_config") != nullptr;
+    dlclose(blas);
+    return has;
+  }();
+  return loaded;
+}
+
+double KluSolver::default_umfpack_flops() {
+  return openblas_loaded() ? kUmfpackFlopsOpenBlas : kUmfpackFlopsReferenceBlas;
+}
 
 KluSolver::KluSolver(SUNContext ctx, Ordering ordering, Pivoting pivoting, Backend backend,
                      double umfpack_flops)

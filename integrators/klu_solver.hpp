@@ -55,8 +55,13 @@
 // KLU refactors as fast as UMFPACK factors. Backend::Auto asks KLU's
 // analysis (AMD, cheap beside a factorization) for its estimate of the
 // factorization's flops and takes UMFPACK from `umfpack_flops` per unknown
-// on (measured crossover 3e4: square blocks of 5*10^4 dofs, rings of 10^5
-// at 2.5e4 still KLU's); each backend can be forced.
+// on; each backend can be forced. The crossover depends on the BLAS under
+// UMFPACK's fronts (docs/performance.md §11): with OpenBLAS (what
+// scripts/install-deps.sh installs) 8e3, where the bearings (9e3) factor
+// 1.15-1.3x faster on UMFPACK and a 50 x 50 square (7e3) is even; with
+// Debian's reference BLAS 3e4 (square blocks of 5*10^4 dofs; rings of 10^5
+// at 2.5e4 were still KLU's). default_umfpack_flops() asks which one the
+// process loaded.
 //
 // Backend::Amg is not an LU: GMRES preconditioned by smoothed-aggregation
 // multigrid (integrators/amg.hpp), whose work per unknown does not grow with
@@ -89,8 +94,15 @@ class KluSolver {
   /// (integrators/amg.hpp); Auto: by the fill, see above.
   enum class Backend { Auto, Klu, Umfpack, Amg };
   /// Auto's threshold: KLU's estimated factorization flops per unknown
-  /// from which UMFPACK factors faster (docs/performance.md §11).
-  static constexpr double kUmfpackFlops = 3e4;
+  /// from which UMFPACK factors faster (docs/performance.md §11), with
+  /// OpenBLAS and with a BLAS that has no dense kernels of its own.
+  static constexpr double kUmfpackFlopsOpenBlas = 8e3;
+  static constexpr double kUmfpackFlopsReferenceBlas = 3e4;
+  /// kUmfpackFlopsOpenBlas when the BLAS this process loaded (libblas.so.3,
+  /// Debian's alternatives) is OpenBLAS, else kUmfpackFlopsReferenceBlas.
+  static double default_umfpack_flops();
+  /// Whether that BLAS is OpenBLAS (asked once).
+  static bool openblas_loaded();
   /// Auto's threshold for AMG-preconditioned GMRES, on a matrix it applies
   /// to (no constraint rows, Amg::applies): from this estimate of KLU's
   /// flops per unknown on, the multigrid's work per unknown, which does not
@@ -121,7 +133,7 @@ class KluSolver {
   };
 
   KluSolver(SUNContext ctx, Ordering ordering, Pivoting pivoting, Backend backend = Backend::Klu,
-            double umfpack_flops = kUmfpackFlops);
+            double umfpack_flops = default_umfpack_flops());
   ~KluSolver();
   KluSolver(const KluSolver&) = delete;
   KluSolver& operator=(const KluSolver&) = delete;

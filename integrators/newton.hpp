@@ -47,7 +47,7 @@ struct NewtonSettings {
   // The sparse LU (integrators/klu_solver.hpp): Auto takes UMFPACK where
   // KLU's analysis estimates umfpack_flops or more per unknown, else KLU.
   KluSolver::Backend linear_solver = KluSolver::Backend::Auto;
-  double umfpack_flops = KluSolver::kUmfpackFlops;
+  double umfpack_flops = KluSolver::default_umfpack_flops();
   // Modified Newton: a Jacobian (and its factorization) serves up to this
   // many iterations of a solve; 1 is Newton's method. A reused Jacobian is
   // dropped as soon as an iteration reduces the residual by less than

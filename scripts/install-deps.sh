@@ -11,6 +11,10 @@ packages=(
   python3 python3-meshio python3-numpy gnuplot-nox
   python3-dev pybind11-dev python3-pytest python3-matplotlib
   libopenmpi-dev openmpi-bin
+  # OpenBLAS (serial: studies run their own processes) under UMFPACK's dense
+  # fronts; Debian's alternatives point libblas.so.3 at it. 1.15-3.6x faster
+  # factorizations from 10^4 flops per unknown (docs/performance.md §11).
+  libopenblas0-serial
 )
 if [[ "${EMDAE_BROWSER_TESTS:-1}" == 1 ]]; then packages+=(chromium); fi
 # VTK's own reader (ParaView's) for the VTU tests (tests/test_report.cpp; ~230 MB).

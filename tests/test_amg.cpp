@@ -8,8 +8,11 @@
 #include <Eigen/SparseLU>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
+#include <fstream>
 #include <memory>
 #include <numeric>
+#include <string>
 #include <vector>
 
 #include "core/assembly.hpp"
@@ -472,6 +475,34 @@ TEST(KluRows, RowsScaledOverTwelveDecadesSolveToRoundOff) {
   N_VDestroy(nb);
   N_VDestroy(nx);
   SUNMatDestroy(m);
+}
+
+// Auto's UMFPACK threshold follows the BLAS the process loaded: OpenBLAS
+// (scripts/install-deps.sh installs it; Debian's alternatives then point
+// libblas.so.3 at it) or the reference BLAS. The libblas.so.3 mapped into
+// this process (/proc/self/maps, its link resolved) says which; the
+// detection, which asks the dynamic linker what UMFPACK's dgemm_ binds to,
+// must agree. Run it also with LD_LIBRARY_PATH=/usr/lib/x86_64-linux-gnu/blas
+// (the reference BLAS beside OpenBLAS's LAPACK): false.
+TEST(KluRows, UmfpackThresholdFollowsTheLoadedBlas) {
+  std::ifstream maps("/proc/self/maps");
+  ASSERT_TRUE(maps.good());
+  std::string line, blas;
+  while (std::getline(maps, line)) {
+    const auto at = line.find('/');
+    if (at == std::string::npos || line.find("/libblas.so.3") == std::string::npos) continue;
+    const std::string path = line.substr(at);
+    ASSERT_TRUE(blas.empty() || blas == path) << "two BLAS mapped: " << blas << ", " << path;
+    blas = path;
+  }
+  ASSERT_FALSE(blas.empty()) << "UMFPACK's BLAS is not loaded";
+  const bool openblas_mapped =
+      std::filesystem::canonical(blas).string().find("openblas") != std::string::npos;
+  EXPECT_EQ(KluSolver::openblas_loaded(), openblas_mapped);
+  EXPECT_EQ(KluSolver::default_umfpack_flops(), openblas_mapped
+                                                    ? KluSolver::kUmfpackFlopsOpenBlas
+                                                    : KluSolver::kUmfpackFlopsReferenceBlas);
+  EXPECT_EQ(NewtonSettings{}.umfpack_flops, KluSolver::default_umfpack_flops());
 }
 
 }  // namespace emdae

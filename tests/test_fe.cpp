@@ -973,10 +973,12 @@ TEST(NewtonSolve, UmfpackAndKluGiveTheSameSteps) {
   std::vector<State> ends;
   std::vector<std::vector<int>> iterations;
   for (const Case c :
-       {Case{KluSolver::Backend::Klu, KluSolver::kUmfpackFlops, KluSolver::Backend::Klu},
-        Case{KluSolver::Backend::Umfpack, KluSolver::kUmfpackFlops, KluSolver::Backend::Umfpack},
+       {Case{KluSolver::Backend::Klu, KluSolver::default_umfpack_flops(), KluSolver::Backend::Klu},
+        Case{KluSolver::Backend::Umfpack, KluSolver::default_umfpack_flops(),
+             KluSolver::Backend::Umfpack},
         Case{KluSolver::Backend::Auto, 1.0, KluSolver::Backend::Umfpack},
-        Case{KluSolver::Backend::Auto, KluSolver::kUmfpackFlops, KluSolver::Backend::Klu}}) {
+        Case{KluSolver::Backend::Auto, KluSolver::default_umfpack_flops(),
+             KluSolver::Backend::Klu}}) {
     NewtonSettings ns{1e-10, 25, false};
     ns.linear_solver = c.asked;
     ns.umfpack_flops = c.flops;
