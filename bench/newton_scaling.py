@@ -15,9 +15,20 @@ the longer run's maximum resident set (os.wait4), per dof.
 
     python3 bench/newton_scaling.py [--sizes 70,126,224,400,708]
         [--solvers amg,auto] [--lu-max 400] [--extra-steps 3] [--markdown F]
+        [--floor] [--jacobian-reuse auto|N]
 
-"auto" is the default choice (UMFPACK on these squares from 5*10^4 dofs
-without AMG; with the AMG rule of docs/performance.md §13 it is "amg").
+--floor adds, for each size and solver, the floor of one iteration on the
+same block and solver (bench/newton_floor: one assembly of the residual and
+the Jacobian as StepProblem makes them, one set-up of the linear solver and
+one solve, the first iteration's analysis left out) and the ratio of the
+run's time per iteration to it (issue 14: within 1.2x at 10^5 dofs). The
+floor runs right after the two runs of its row, so that the three see the
+same load. With --floor the runs use Newton's method (jacobian_reuse = 1,
+a set-up in every iteration as in the floor) unless --jacobian-reuse says
+otherwise; "auto" lets a run reuse Jacobians and go below the floor.
+
+"auto" is the default choice: "amg" on these squares from 10^4 flops per
+unknown (docs/performance.md §13), KLU below.
 Solvers other than amg run up to --lu-max elements across (UMFPACK at 10^6
 dofs needs ~6 kB per dof and minutes per run).
 """
@@ -33,8 +44,9 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parent.parent
 
 
-def scene(nx, solver, steps):
+def scene(nx, solver, steps, reuse="auto"):
     dt = 0.01
+    reuse = f'"{reuse}"' if reuse == "auto" else reuse
     return f"""[scene]
 name = "spin_block_{nx}"
 description = "a spinning SVK square of {nx} x {nx} elements (bench/newton_scaling.py)"
@@ -45,6 +57,7 @@ t_end = {dt * steps:.10g}
 name = "em"
 newton_tolerance = 1e-10
 linear_solver = "{solver}"
+jacobian_reuse = {reuse}
 [output]
 vtu_every = 0
 [[bodies]]
@@ -56,9 +69,9 @@ material = {{ model = "svk", young = 100.0, poisson = 0.3, density = 1.0 }}
 """
 
 
-def run(emdae, folder, nx, solver, steps):
+def run(emdae, folder, nx, solver, steps, reuse="auto"):
     path = folder / f"block_{nx}_{solver}_{steps}.toml"
-    path.write_text(scene(nx, solver, steps))
+    path.write_text(scene(nx, solver, steps, reuse))
     out = folder / f"out_{nx}_{solver}_{steps}"
     cmd = [str(emdae), "run", str(path), "-q", "--out", str(out), "--force",
            "--set", "limits.max_memory_mb=64000"]
@@ -88,22 +101,38 @@ def main():
     ap.add_argument("--lu-max", type=int, default=400)
     ap.add_argument("--extra-steps", type=int, default=3)
     ap.add_argument("--markdown")
+    ap.add_argument("--floor", action="store_true")
+    ap.add_argument("--jacobian-reuse", default=None,
+                    help='the scene\'s jacobian_reuse: "auto" (the default) or 1 (Newton\'s '
+                         "method: a set-up in every iteration, as the floor has)")
     a = ap.parse_args()
+    if a.jacobian_reuse is None:
+        a.jacobian_reuse = "1" if a.floor else "auto"
+    if a.jacobian_reuse != "auto" and not a.jacobian_reuse.isdigit():
+        sys.exit(f"--jacobian-reuse: \"auto\" or a count, not {a.jacobian_reuse!r}")
+    floor_exe = Path(a.emdae).resolve().parent.parent / "bench" / "newton_floor"
+    if a.floor and not os.access(floor_exe, os.X_OK):
+        sys.exit(f"--floor needs {floor_exe}: cmake --build build/release --target newton_floor")
     sizes = [int(x) for x in a.sizes.split(",")]
     solvers = a.solvers.split(",")
     rows, per_solver = [], {s: [] for s in solvers}
     header = ("| solver | nx | dofs | Newton iterations (1 step / 1 + K) | CPU s (1 / 1 + K) "
               "| CPU ms per iteration (steady) | µs per iteration per dof | peak MB | kB per dof |")
+    columns = 9
+    if a.floor:
+        header += (" floor ms (assembly + set-up + solve) | iteration / floor |")
+        columns += 2
+    print(f"jacobian_reuse = {a.jacobian_reuse}")
     print(header)
-    print("|" + "---|" * 9)
+    print("|" + "---|" * columns)
     with tempfile.TemporaryDirectory(prefix="emdae_scaling_") as tmp:
         folder = Path(tmp)
         for nx in sizes:
             for solver in solvers:
                 if solver != "amg" and nx > a.lu_max:
                     continue
-                s1, _ = run(a.emdae, folder, nx, solver, 1)
-                sk, peak = run(a.emdae, folder, nx, solver, 1 + a.extra_steps)
+                s1, _ = run(a.emdae, folder, nx, solver, 1, a.jacobian_reuse)
+                sk, peak = run(a.emdae, folder, nx, solver, 1 + a.extra_steps, a.jacobian_reuse)
                 dofs = sk["dofs"]
                 its = sk["newton_iterations"] - s1["newton_iterations"]
                 cpu = sk["cpu_seconds"] - s1["cpu_seconds"]
@@ -113,9 +142,21 @@ def main():
                        f"{sk['newton_iterations']} | {s1['cpu_seconds']:.2f} / {sk['cpu_seconds']:.2f} "
                        f"| {1e3 * per_it:.1f} | {1e6 * per_it / dofs:.2f} | {peak / 2**20:.0f} "
                        f"| {peak / 1024 / dofs:.2f} |")
+                if a.floor:
+                    p = subprocess.run([str(floor_exe), str(nx), solver, str(a.extra_steps + 2)],
+                                       capture_output=True, text=True)
+                    fl = p.stdout.split()
+                    v = dict(zip(fl[0::2], fl[1::2]))
+                    if p.returncode != 0 or "floor_s" not in v:
+                        row += f" failed: {(p.stdout + p.stderr).strip()[-80:]} | – |"
+                    else:
+                        asm, setup, solve = (float(v[k]) for k in ("asm_s", "setup_s", "solve_s"))
+                        floor = asm + setup + solve
+                        row += (f" {1e3 * floor:.1f} ({1e3 * asm:.1f} + {1e3 * setup:.1f} + "
+                                f"{1e3 * solve:.1f}, {v['solver']}) | {per_it / floor:.2f} |")
                 print(row, flush=True)
                 rows.append(row)
-    lines = [header, "|" + "---|" * 9] + rows + [""]
+    lines = [header, "|" + "---|" * columns] + rows + [""]
     for solver, pts in per_solver.items():
         window = [(d, t) for d, t in pts if 0.9e4 <= d <= 1.1e6]
         if len(window) >= 2:

@@ -47,7 +47,12 @@ dt^2/(2 m_i)) times 2 rho A/dt^2, A the mean nodal area of the mesh; the
 
   bench/ring_vs_getfem.py [--emdae build/release/cli/emdae] [--scene FILE]
                           [--t-end T] [--pairs 2] [--getfem-scheme em,midpoint]
-                          [--markdown FILE]
+                          [--markdown FILE] [--emdae-impact velocity_update]
+
+--emdae-impact adds emdae runs with other impact treatments ([scheme] impact)
+beside the scene's own: velocity_update enters a closing node for the whole
+step and corrects its velocity afterwards (no sub-steps, as GetFEM's
+contact), with energy and momenta still exact.
 
 Where GetFEM is not installed (python3-getfem is not importable by this
 Python or by /usr/bin/python3), the script says "GetFEM not installed: only
@@ -162,9 +167,11 @@ class Scene:
 
 # --- emdae ---------------------------------------------------------------------------------
 
-def run_emdae(emdae, scene, out):
+def run_emdae(emdae, scene, out, impact=None):
     args = [emdae, "run", scene.path, "--out", out, "--quiet", "--t-end", repr(scene.t_end),
             "--set", "output.vtu_every=0", "--set", "output.animation_frames=0"]
+    if impact:
+        args += ["--set", f"scheme.impact={impact}"]
     res = subprocess.run(args, capture_output=True, text=True)
     if res.returncode not in (0, 4):  # 4: a tolerance of the scene was exceeded
         raise SystemExit(f"emdae failed ({res.returncode}): {res.stderr.strip()[-400:]}")
@@ -338,6 +345,9 @@ def main():
     ap.add_argument("--getfem-scheme", default="em,midpoint",
                     help="GetFEM's time rule(s): em (SVK energy-conserving), midpoint")
     ap.add_argument("--markdown", help="also write the table to this file")
+    ap.add_argument("--emdae-impact", default="",
+                    help="comma list of [scheme] impact treatments to run emdae with beside the "
+                         "scene's own (e.g. velocity_update: no sub-steps, as GetFEM's contact)")
     a = ap.parse_args()
 
     gf = import_getfem()
@@ -361,7 +371,10 @@ def main():
     print(f"scene {os.path.relpath(scene.path, ROOT)}: {steps} steps of dt = {scene.dt}, "
           f"Newton tolerance {scene.tolerance:g}, {a.pairs} interleaved pair(s)", flush=True)
 
+    impacts = [x for x in a.emdae_impact.split(",") if x]
     results = {"emdae em": []}
+    for i in impacts:
+        results[f"emdae em, impact = {i}"] = []
     for s in schemes:
         results[f"GetFEM {s}"] = []
     with tempfile.TemporaryDirectory() as tmp:
@@ -370,6 +383,11 @@ def main():
             results["emdae em"].append(r)
             print(f"  pair {p + 1}: emdae em {1e3 * r['cpu'] / steps:.2f} ms/step, "
                   f"energy {r['energy']:.1e}", flush=True)
+            for i in impacts:
+                r = run_emdae(a.emdae, scene, os.path.join(tmp, f"emdae{p}_{i}"), i)
+                results[f"emdae em, impact = {i}"].append(r)
+                print(f"  pair {p + 1}: emdae em, impact = {i} {1e3 * r['cpu'] / steps:.2f} "
+                      f"ms/step, energy {r['energy']:.1e}", flush=True)
             for s in schemes:
                 r = run_getfem(gf, np, scene, s)
                 results[f"GetFEM {s}"].append(r)

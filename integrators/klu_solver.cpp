@@ -353,20 +353,23 @@ struct KluSolver::Impl {
 };
 
 bool KluSolver::openblas_loaded() {
-  // UMFPACK's dense kernels are the dgemm_ its own object binds to:
-  // libblas.so.3 through Debian's alternatives, the reference BLAS or
-  // OpenBLAS's (which pulls in libopenblas.so.0). Look it up from UMFPACK's
-  // object (dlsym on its handle searches it and its dependencies, as a
-  // Python extension loaded RTLD_LOCAL would), then ask the object that
-  // defines it, with its own dependencies, for an OpenBLAS entry point.
+  // UMFPACK's dense kernels are the dgemm_ it binds to: libblas.so.3
+  // through Debian's alternatives, the reference BLAS or OpenBLAS's (which
+  // pulls in libopenblas.so.0). For the dependencies of an executable that
+  // is the first definition in the global scope; where UMFPACK came with a
+  // module loaded RTLD_LOCAL (the Python extension) it is outside that
+  // scope, and UMFPACK's own handle finds it among its dependencies. Then
+  // the object that defines it, with its own dependencies, is asked for an
+  // OpenBLAS entry point. Any failure answers false (the safe threshold).
   static const bool loaded = [] {
     Dl_info info;
-    if (!dladdr(reinterpret_cast<void*>(&umfpack_dl_symbolic), &info) || !info.dli_fname)
-      return false;
-    void* umfpack = dlopen(info.dli_fname, RTLD_LAZY | RTLD_NOLOAD);
-    if (!umfpack) return false;
-    void* dgemm = dlsym(umfpack, "dgemm_");
-    dlclose(umfpack);
+    void* dgemm = dlsym(RTLD_DEFAULT, "dgemm_");
+    if (!dgemm && dladdr(reinterpret_cast<void*>(&umfpack_dl_symbolic), &info) && info.dli_fname) {
+      if (void* umfpack = dlopen(info.dli_fname, RTLD_LAZY | RTLD_NOLOAD)) {
+        dgemm = dlsym(umfpack, "dgemm_");
+        dlclose(umfpack);
+      }
+    }
     if (!dgemm || !dladdr(dgemm, &info) || !info.dli_fname) return false;
     void* blas = dlopen(info.dli_fname, RTLD_LAZY | RTLD_NOLOAD);
     if (!blas) return false;

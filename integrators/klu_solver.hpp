@@ -57,8 +57,9 @@
 // factorization's flops and takes UMFPACK from `umfpack_flops` per unknown
 // on; each backend can be forced. The crossover depends on the BLAS under
 // UMFPACK's fronts (docs/performance.md §11): with OpenBLAS (what
-// scripts/install-deps.sh installs) 8e3, where the bearings (9e3) factor
-// 1.15-1.3x faster on UMFPACK and a 50 x 50 square (7e3) is even; with
+// scripts/install-deps.sh installs) 8e3, where whole runs of the bearings
+// (9e3 to 2e4) take 1/1.16 to 1/1.32 of KLU's CPU time on UMFPACK and a
+// 50 x 50 square's factorization (7e3) is even; with
 // Debian's reference BLAS 3e4 (square blocks of 5*10^4 dofs; rings of 10^5
 // at 2.5e4 were still KLU's). default_umfpack_flops() asks which one the
 // process loaded.

@@ -12,8 +12,9 @@ packages=(
   python3-dev pybind11-dev python3-pytest python3-matplotlib
   libopenmpi-dev openmpi-bin
   # OpenBLAS (serial: studies run their own processes) under UMFPACK's dense
-  # fronts; Debian's alternatives point libblas.so.3 at it. 1.15-3.6x faster
-  # factorizations from 10^4 flops per unknown (docs/performance.md §11).
+  # fronts; Debian's alternatives point libblas.so.3 at it. From 10^4 flops
+  # per unknown UMFPACK then factors 1.3-3.6x faster than KLU refactors, and
+  # the bearings run 1.16-1.32x faster on it (docs/performance.md §11).
   libopenblas0-serial
 )
 if [[ "${EMDAE_BROWSER_TESTS:-1}" == 1 ]]; then packages+=(chromium); fi

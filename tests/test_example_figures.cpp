@@ -15,6 +15,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <fstream>
 #include <nlohmann/json.hpp>
@@ -67,7 +68,7 @@ const std::vector<ExampleRun> kRuns = {
 
 // Figures that are measured, not computed: never compared.
 bool measured(const std::string& key) {
-  return key == "cpu_seconds" || key == "emdae_version" || key == "source";
+  return key == "cpu_seconds" || key == "emdae_version" || key == "source" || key == "blas";
 }
 
 // Errors and residuals: at round-off they may move in their last digits (and
@@ -95,7 +96,9 @@ void expect_same(const Json& before, const Json& after, const std::string& path,
   if (before.is_object() && after.is_object()) {
     for (const auto& [k, v] : before.items()) {
       ASSERT_TRUE(after.contains(k)) << path << "." << k << " is gone";
-      expect_same(v, after[k], path + "." + k, k);
+      // A check's "value" is the figure the check is named after
+      // (checks.gap_violation.value): at round-off as that figure is.
+      expect_same(v, after[k], path + "." + k, k == "value" ? key : k);
     }
     for (const auto& [k, v] : after.items())
       EXPECT_TRUE(before.contains(k)) << path << "." << k << " is new: " << v.dump();
@@ -118,13 +121,26 @@ void expect_same(const Json& before, const Json& after, const std::string& path,
   EXPECT_EQ(before, after) << path;
 }
 
-Json run_figures(const ExampleRun& run, const TempDir& dir) {
+Json run_summary(const ExampleRun& run, const TempDir& dir) {
   const std::string out = dir / "out";
   const auto r = emdae("run " + quote(example(run.scene)) + " " + run.args + " --out " +
                        quote(out) + " -q --set output.vtu_every=0");
   // 0: ok; 4: a check of the scene failed at the shortened end (still figures).
   EXPECT_TRUE(r.code == 0 || r.code == 4) << run.label << ": " << r.output;
-  return figures(read_json(out + "/summary.json"));
+  return read_json(out + "/summary.json");
+}
+
+// A run on UMFPACK (the bearings and the Hertz half disk, chosen by
+// linear_solver = "auto") was recorded on OpenBLAS, where "auto" takes
+// UMFPACK from 8e3 flops per unknown; on another BLAS it takes KLU there,
+// and the counts and round-off differ by design (docs/performance.md §11).
+bool recorded_on_umfpack(const Json& figures) {
+  return figures.contains("linear_solver") &&
+         figures["linear_solver"].value("umfpack_factorizations", 0L) > 0;
+}
+bool ran_on_openblas(const Json& summary) {
+  return summary.contains("linear_solver") &&
+         summary["linear_solver"].value("blas", std::string()) == "openblas";
 }
 
 // UMFPACK's fronts go through OpenBLAS (the bearings, linear_solver =
@@ -145,7 +161,7 @@ TEST(ExampleFigures, SameAsBeforeTheFrontDoor) {
     Json all = Json::object();
     for (const auto& run : kRuns) {
       const TempDir dir;
-      all[run.label] = run_figures(run, dir);
+      all[run.label] = figures(run_summary(run, dir));
     }
     std::ofstream(path) << all.dump(1) << "\n";
     GTEST_SKIP() << "recorded to " << path;
@@ -156,7 +172,15 @@ TEST(ExampleFigures, SameAsBeforeTheFrontDoor) {
     SCOPED_TRACE(run.label);
     ASSERT_TRUE(reference.contains(run.label));
     const TempDir dir;
-    expect_same(reference[run.label], run_figures(run, dir), run.label, "");
+    const Json summary = run_summary(run, dir);
+    if (recorded_on_umfpack(reference[run.label]) && !ran_on_openblas(summary)) {
+      std::printf(
+          "[ NOTE ] %s: recorded on UMFPACK with OpenBLAS; this BLAS is another, "
+          "so \"auto\" chose otherwise: not compared\n",
+          run.label.c_str());
+      continue;
+    }
+    expect_same(reference[run.label], figures(summary), run.label, "");
   }
 }
 

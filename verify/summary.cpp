@@ -349,7 +349,10 @@ nlohmann::ordered_json to_json(const Summary& s) {
                           {"amg_hierarchies", c.amg_setups},
                           {"gmres_solves", c.krylov_solves},
                           {"gmres_iterations", c.krylov_iterations},
-                          {"amg_fallbacks", c.amg_fallbacks}};
+                          {"amg_fallbacks", c.amg_fallbacks},
+                          // What UMFPACK's dense kernels ran on: the Auto
+                          // threshold and UMFPACK's round-off depend on it.
+                          {"blas", KluSolver::openblas_loaded() ? "openblas" : "other"}};
   j["cpu_seconds"] = s.cpu_seconds;
   j["energy_initial"] = s.energy_initial;
   j["energy_rel_error_max"] = s.energy_rel_error_max;
