@@ -47,6 +47,7 @@
 #include "core/material.hpp"
 #include "core/mesh.hpp"
 #include "core/system.hpp"
+#include "thread_cpu.hpp"
 
 namespace {
 
@@ -152,11 +153,7 @@ Scene& ring_scene(MaterialModel model) {
 
 // CPU time of this thread (the phases are reported in CPU seconds, like the
 // benchmark's own CPU column: the machine is shared).
-double thread_cpu_seconds() {
-  timespec ts{};
-  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
-  return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
-}
+using bench::thread_cpu_seconds;
 
 void set_rates(benchmark::State& st, double n_elements, double n_dofs) {
   using C = benchmark::Counter;

@@ -40,6 +40,7 @@
 #include "core/mesh.hpp"
 #include "core/model.hpp"
 #include "core/system.hpp"
+#include "thread_cpu.hpp"
 
 namespace {
 
@@ -93,11 +94,7 @@ Scene& scene(const std::string& kind, int n) {
   return *cached;
 }
 
-double thread_cpu_seconds() {
-  timespec ts{};
-  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
-  return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
-}
+using bench::thread_cpu_seconds;
 
 Eigen::Vector2d pos(const Vec& q, int node) {
   return q.segment<2>(2 * node);

@@ -38,16 +38,11 @@
 #include "core/mesh.hpp"
 #include "core/system.hpp"
 #include "integrators/klu_solver.hpp"
+#include "thread_cpu.hpp"
 
 using namespace emdae;
 
 namespace {
-
-double cpu() {
-  timespec ts{};
-  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
-  return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
-}
 
 // em's iteration matrix at q (scaled mass + the potential's Jacobian).
 SparseMatrix iteration_matrix(const System& s, const Vec& q, double dt) {
@@ -106,16 +101,16 @@ int main(int argc, char** argv) {
       N_Vector b = N_VNew_Serial(n, ctx), x = N_VNew_Serial(n, ctx);
       N_VConst(1.0, b);
       lu.load(a0, m);
-      double t0 = cpu();
+      double t0 = bench::thread_cpu_seconds();
       int flag = SUNLinSolSetup(lu.get(), m);
-      const double first = cpu() - t0;
+      const double first = bench::thread_cpu_seconds() - t0;
       lu.load(a1, m);
-      t0 = cpu();
+      t0 = bench::thread_cpu_seconds();
       flag |= SUNLinSolSetup(lu.get(), m);
-      const double next = cpu() - t0;
-      t0 = cpu();
+      const double next = bench::thread_cpu_seconds() - t0;
+      t0 = bench::thread_cpu_seconds();
       flag |= SUNLinSolSolve(lu.get(), m, x, b, 0.0);
-      const double solve = cpu() - t0;
+      const double solve = bench::thread_cpu_seconds() - t0;
       const Eigen::Map<const Vec> xv(N_VGetArrayPointer(x), n);
       const double residual = (a1 * xv - Vec::Ones(n)).norm() / std::sqrt(double(n));
       std::printf("%-14s %9ld %10ld %9.1f %11.3g  %-8s %9.4f %9.4f %9.4f %10.2e%s\n", spec.c_str(),

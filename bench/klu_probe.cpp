@@ -42,16 +42,11 @@
 #include "integrators/statics.hpp"
 #include "integrators/stepper.hpp"
 #include "paper_scenes.hpp"
+#include "thread_cpu.hpp"
 
 namespace {
 
 const double kUround23 = std::pow(std::numeric_limits<double>::epsilon(), 2.0 / 3.0);
-
-double thread_cpu() {
-  timespec ts{};
-  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
-  return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
-}
 
 struct Counters {
   long analyze = 0, factor = 0, refactor = 0, rcond_low = 0, condest = 0, full_after_refactor = 0;
@@ -114,9 +109,9 @@ klu_l_symbolic* klu_l_analyze(SuiteSparse_long n, SuiteSparse_long* ap, SuiteSpa
   ++g.analyze;
   g.refactor_pending = false;
   last_n = n;
-  const double t0 = thread_cpu();
+  const double t0 = emdae::bench::thread_cpu_seconds();
   klu_l_symbolic* r = f(n, ap, ai, c);
-  g.t_analyze += thread_cpu() - t0;
+  g.t_analyze += emdae::bench::thread_cpu_seconds() - t0;
   return r;
 }
 
@@ -127,9 +122,9 @@ klu_l_numeric* klu_l_factor(SuiteSparse_long* ap, SuiteSparse_long* ai, double* 
   ++g.factor;
   if (g.refactor_pending) ++g.full_after_refactor;
   g.refactor_pending = false;
-  const double t0 = thread_cpu();
+  const double t0 = emdae::bench::thread_cpu_seconds();
   klu_l_numeric* r = f(ap, ai, ax, s, c);
-  g.t_factor += thread_cpu() - t0;
+  g.t_factor += emdae::bench::thread_cpu_seconds() - t0;
   return r;
 }
 
@@ -144,9 +139,9 @@ SuiteSparse_long klu_l_refactor(SuiteSparse_long* ap, SuiteSparse_long* ai, doub
   last_ai = ai;
   last_ax = ax;
   last_n = s ? s->n : last_n;
-  const double t0 = thread_cpu();
+  const double t0 = emdae::bench::thread_cpu_seconds();
   const SuiteSparse_long r = f(ap, ai, ax, s, num, c);
-  g.t_refactor += thread_cpu() - t0;
+  g.t_refactor += emdae::bench::thread_cpu_seconds() - t0;
   return r;
 }
 
@@ -176,9 +171,9 @@ SuiteSparse_long klu_l_condest(SuiteSparse_long* ap, double* ax, klu_l_symbolic*
                                klu_l_numeric* num, klu_l_common* c) {
   static auto f = real<SuiteSparse_long (*)(SuiteSparse_long*, double*, klu_l_symbolic*,
                                             klu_l_numeric*, klu_l_common*)>("klu_l_condest");
-  const double t0 = thread_cpu();
+  const double t0 = emdae::bench::thread_cpu_seconds();
   const SuiteSparse_long r = f(ap, ax, s, num, c);
-  g.t_condest += thread_cpu() - t0;
+  g.t_condest += emdae::bench::thread_cpu_seconds() - t0;
   ++g.condest;
   g.condest_min = std::min(g.condest_min, c->condest);
   g.condest_max = std::max(g.condest_max, c->condest);
@@ -241,11 +236,11 @@ double klu_condest_of(long n, std::vector<long> ap, std::vector<long> ai, std::v
   klu_l_common c;
   klu_l_defaults(&c);
   c.ordering = ordering;
-  const double t0 = thread_cpu();
+  const double t0 = emdae::bench::thread_cpu_seconds();
   klu_l_symbolic* s = analyze(n, ap.data(), ai.data(), &c);
-  const double t1 = thread_cpu();
+  const double t1 = emdae::bench::thread_cpu_seconds();
   klu_l_numeric* num = s ? factor(ap.data(), ai.data(), ax.data(), s, &c) : nullptr;
-  const double t2 = thread_cpu();
+  const double t2 = emdae::bench::thread_cpu_seconds();
   double cond = std::nan("");
   if (num) {
     rc(s, num, &c);
@@ -471,10 +466,11 @@ void bearing_scene(const std::string& dump) {
   shadow.on = true;
   shadow.n_dofs = s.n_dofs();
   shadow.fixed = &s.is_prescribed();
-  const double c0 = thread_cpu();
+  const double c0 = emdae::bench::thread_cpu_seconds();
   const RunOutcome out = run_dynamics(s, st, 0.01, 2.0);
   std::printf("  dynamics: %s, %ld steps, %ld Newton iterations, %.2f s CPU in all\n",
-              out.message.c_str(), out.steps, out.newton_iterations, thread_cpu() - c0);
+              out.message.c_str(), out.steps, out.newton_iterations,
+              emdae::bench::thread_cpu_seconds() - c0);
   shadow.on = false;
   report("em dynamics");
   std::printf(
