@@ -36,7 +36,6 @@
 #include <klu.h>
 
 #include <cmath>
-#include <ctime>
 #include <memory>
 #include <string>
 #include <vector>

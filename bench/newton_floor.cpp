@@ -33,7 +33,6 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
-#include <ctime>
 #include <memory>
 #include <string>
 
@@ -46,8 +45,6 @@
 #include "thread_cpu.hpp"
 
 using namespace emdae;
-
-namespace {}  // namespace
 
 int main(int argc, char** argv) {
   if (argc < 3) {

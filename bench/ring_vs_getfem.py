@@ -371,23 +371,19 @@ def main():
     print(f"scene {os.path.relpath(scene.path, ROOT)}: {steps} steps of dt = {scene.dt}, "
           f"Newton tolerance {scene.tolerance:g}, {a.pairs} interleaved pair(s)", flush=True)
 
-    impacts = [x for x in a.emdae_impact.split(",") if x]
-    results = {"emdae em": []}
-    for i in impacts:
-        results[f"emdae em, impact = {i}"] = []
+    # emdae as the scene says, then with each impact treatment asked for.
+    emdae_runs = [("emdae em", None)] + [(f"emdae em, impact = {i}", i)
+                                         for i in a.emdae_impact.split(",") if i]
+    results = {label: [] for label, _ in emdae_runs}
     for s in schemes:
         results[f"GetFEM {s}"] = []
     with tempfile.TemporaryDirectory() as tmp:
         for p in range(a.pairs):
-            r = run_emdae(a.emdae, scene, os.path.join(tmp, f"emdae{p}"))
-            results["emdae em"].append(r)
-            print(f"  pair {p + 1}: emdae em {1e3 * r['cpu'] / steps:.2f} ms/step, "
-                  f"energy {r['energy']:.1e}", flush=True)
-            for i in impacts:
-                r = run_emdae(a.emdae, scene, os.path.join(tmp, f"emdae{p}_{i}"), i)
-                results[f"emdae em, impact = {i}"].append(r)
-                print(f"  pair {p + 1}: emdae em, impact = {i} {1e3 * r['cpu'] / steps:.2f} "
-                      f"ms/step, energy {r['energy']:.1e}", flush=True)
+            for k, (label, impact) in enumerate(emdae_runs):
+                r = run_emdae(a.emdae, scene, os.path.join(tmp, f"emdae{p}_{k}"), impact)
+                results[label].append(r)
+                print(f"  pair {p + 1}: {label} {1e3 * r['cpu'] / steps:.2f} ms/step, "
+                      f"energy {r['energy']:.1e}", flush=True)
             for s in schemes:
                 r = run_getfem(gf, np, scene, s)
                 results[f"GetFEM {s}"].append(r)
