@@ -63,7 +63,14 @@ struct KluSolver::Impl {
   klu_l_numeric* numeric = nullptr;
   bool pattern_changed = true;
   double rcond_fresh = 0.0;
-  double flops_per_unknown = 0.0;  // of the last analysis (KLU's AMD estimate)
+  double flops_per_unknown = 0.0;     // of the last analysis (KLU's AMD estimate)
+  double estimate_per_unknown = 0.0;  // the estimate itself, before pivot_fill
+  // Measured / estimated flops of KLU's last fresh factorization of a
+  // pattern with zero diagonal entries (the multipliers' rows: where KLU
+  // must pivot off the diagonal), applied to the estimates of later such
+  // patterns; patterns with a full diagonal are estimated as they are.
+  double pivot_fill = 1.0;
+  bool zero_diagonal = false;  // of the pattern analysed last
   long last_flag = SUNLS_SUCCESS;
   Counters counters;
   // The pattern loaded last, copied for a matrix that is not kept
@@ -146,6 +153,16 @@ struct KluSolver::Impl {
     return flops;
   }
 
+  // Whether a column has no diagonal entry or a zero one.
+  static bool has_zero_diagonal(long n, const long* ap, const long* ai, const double* ax) {
+    for (long j = 0; j < n; ++j) {
+      bool found = false;
+      for (long p = ap[j]; p < ap[j + 1] && !found; ++p) found = ai[p] == j && ax[p] != 0.0;
+      if (!found) return true;
+    }
+    return false;
+  }
+
   static Impl& of(SUNLinearSolver s) { return *static_cast<Impl*>(s->content); }
 
   // Scales the rows of the loaded matrix (already scaled by row_scale, if
@@ -171,6 +188,30 @@ struct KluSolver::Impl {
     if (!numeric)
       return common.status == KLU_SINGULAR ? SUNLS_LUFACT_FAIL : SUNLS_PACKAGE_FAIL_UNREC;
     ++counters.factorizations;
+    if (backend == Backend::Auto && estimate_per_unknown > 0.0 &&
+        klu_l_flops(symbolic, numeric, &common)) {
+      const long n = symbolic->n;
+      const double measured = common.flops / double(n);
+      const bool filled = measured >= kPivotFill * estimate_per_unknown;
+      if (zero_diagonal) pivot_fill = filled ? measured / estimate_per_unknown : 1.0;
+      if (filled && measured >= umfpack_flops) {
+        // UMFPACK factors this pattern from now on: the values as loaded
+        // (without the rows' scaling), with its own analysis and pivoting.
+        for (long p = 0; p < ap[n]; ++p) ax[p] /= row_scale[ai[p]];
+        row_scale.clear();
+        free_numeric();
+        free_symbolic();
+        flops_per_unknown = measured;
+        in_use = Backend::Umfpack;
+        ++counters.pivot_fill_switches;
+        if (umfpack_dl_symbolic(n, n, ap, ai, ax, &umf_symbolic, umf_control, umf_info) !=
+            UMFPACK_OK) {
+          free_symbolic();
+          return SUNLS_PACKAGE_FAIL_UNREC;
+        }
+        return umf_factor(ap, ai, ax);
+      }
+    }
     klu_l_rcond(symbolic, numeric, &common);
     rcond_fresh = common.rcond;
     return SUNLS_SUCCESS;
@@ -192,12 +233,14 @@ struct KluSolver::Impl {
       // Forced AMG where it applies; Auto asks KLU's analysis first.
       bool take_amg = backend == Backend::Amg && Amg::applies(n, ap, ai, ax, 2);
       in_use = backend == Backend::Umfpack ? Backend::Umfpack : Backend::Klu;
-      flops_per_unknown = 0.0;
+      flops_per_unknown = estimate_per_unknown = 0.0;
       if (!take_amg && in_use == Backend::Klu) {
         symbolic = klu_l_analyze(n, ap, ai, &common);
         if (!symbolic) return SUNLS_PACKAGE_FAIL_UNREC;
         if (backend == Backend::Auto || common.ordering == static_cast<int>(Ordering::Amd))
-          flops_per_unknown = estimated_flops(n, ap, ai) / double(n);
+          flops_per_unknown = estimate_per_unknown = estimated_flops(n, ap, ai) / double(n);
+        zero_diagonal = has_zero_diagonal(n, ap, ai, ax);
+        if (backend == Backend::Auto && zero_diagonal) flops_per_unknown *= pivot_fill;
         if (backend == Backend::Auto) {
           take_amg = flops_per_unknown >= kAmgFlops && Amg::applies(n, ap, ai, ax, 2);
           if (take_amg || flops_per_unknown >= umfpack_flops) free_symbolic();
@@ -440,6 +483,14 @@ const KluSolver::Counters& KluSolver::counters() const {
 
 KluSolver::Backend KluSolver::backend_in_use() const {
   return impl_->in_use;
+}
+
+double KluSolver::pivot_fill() const {
+  return impl_->pivot_fill;
+}
+
+void KluSolver::set_pivot_fill(double ratio) {
+  impl_->pivot_fill = std::max(1.0, ratio);
 }
 
 double KluSolver::flops_per_unknown() const {

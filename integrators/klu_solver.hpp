@@ -109,6 +109,12 @@ class KluSolver {
   /// flops per unknown on, the multigrid's work per unknown, which does not
   /// grow with the fill, is the smaller (docs/performance.md §13).
   static constexpr double kAmgFlops = 1e4;
+  /// Auto measures the flops of KLU's fresh factorizations: where they are
+  /// this many times the analysis's estimate or more (pivots off the
+  /// diagonal: the massless rows of a modified mass) and at or above the
+  /// UMFPACK threshold, UMFPACK takes the pattern, and later patterns'
+  /// estimates are scaled by the measured ratio.
+  static constexpr double kPivotFill = 2.0;
 
   struct Counters {
     long analyses = 0;                // symbolic analyses (a new pattern)
@@ -120,11 +126,14 @@ class KluSolver {
     long krylov_solves = 0;           // GMRES solves
     long amg_fallbacks = 0;           // solves GMRES did not finish, and patterns with no
                                       // hierarchy: factored by UMFPACK
+    long pivot_fill_switches = 0;     // patterns Auto gave to UMFPACK after KLU's pivoting
+                                      // did kPivotFill times its estimated flops or more
 
     /// Every count, in declaration order (sums, checkpoints).
-    std::array<long*, 8> fields() {
-      return {&analyses,   &factorizations,    &refactorizations, &umfpack_factorizations,
-              &amg_setups, &krylov_iterations, &krylov_solves,    &amg_fallbacks};
+    std::array<long*, 9> fields() {
+      return {&analyses,           &factorizations,    &refactorizations, &umfpack_factorizations,
+              &amg_setups,         &krylov_iterations, &krylov_solves,    &amg_fallbacks,
+              &pivot_fill_switches};
     }
     Counters& operator+=(Counters o) {
       const auto mine = fields(), theirs = o.fields();
@@ -166,6 +175,12 @@ class KluSolver {
   /// the pattern analysed last (UMFPACK's count where it factors a pattern
   /// KLU did not analyse); 0 before any analysis, and for AMG.
   double flops_per_unknown() const;
+  /// What Auto has measured of KLU's pivoting on patterns with zero
+  /// diagonal entries (measured / estimated flops, 1 where it pivots near
+  /// the diagonal), to hand on to a solver made for another size (the
+  /// Newton solve makes one whenever the number of multipliers changes).
+  double pivot_fill() const;
+  void set_pivot_fill(double ratio);
 
  private:
   struct Impl;

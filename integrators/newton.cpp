@@ -42,12 +42,13 @@ struct NewtonSolver::Impl {
   double last_residual = 0.0;
   SparseMatrix jac;
   KluSolver::Counters before;  // of the solvers released since
+  double pivot_fill = 1.0;     // what the last solver measured of KLU's pivoting
 
   ~Impl() { release(); }
 
   void release() {
     kin.reset();
-    if (klu) before += klu->counters();
+    if (klu) before += klu->counters(), pivot_fill = klu->pivot_fill();
     klu.reset();
     jmat.reset();
     for (sundials::Vector* v : {&u, &uscale, &fscale}) v->reset();
@@ -71,6 +72,7 @@ struct NewtonSolver::Impl {
     // solver keeps its analysis across KINSol calls while the pattern holds.
     klu = std::make_unique<KluSolver>(ctx.get(), KluSolver::Ordering::Amd,
                                       KluSolver::Pivoting::Kept, s.linear_solver, s.umfpack_flops);
+    klu->set_pivot_fill(pivot_fill);
     kin.reset(check_ptr(KINCreate(ctx.get()), "KINCreate"));
     check(KINInit(kin.get(), &Impl::residual_cb, u.get()), "KINInit");
     check(KINSetUserData(kin.get(), this), "KINSetUserData");

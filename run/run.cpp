@@ -365,8 +365,8 @@ RunResult::End integrate_model(const std::function<std::unique_ptr<Stepper>()>& 
 // --- checkpoints --------------------------------------------------------------------
 
 // 2: with the trajectories' place; 3: with the driver's last-resort steps;
-// 4: with the linear solver's counters.
-constexpr const char* kCheckpointMagic = "emdae checkpoint 4";
+// 4: with the linear solver's counters; 5: with its pivot-fill switches.
+constexpr const char* kCheckpointMagic = "emdae checkpoint 5";
 
 // What a checkpoint holds besides the recorder: the loop, the state, where
 // the history and the fields are.

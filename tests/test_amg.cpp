@@ -506,3 +506,129 @@ TEST(KluRows, UmfpackThresholdFollowsTheLoadedBlas) {
 }
 
 }  // namespace emdae
+
+namespace emdae {
+namespace {
+
+// An m x m grid's five-point pattern whose diagonal is small beside its
+// neighbours' entries (`diagonal`, against 1 +- 0.3), with the first
+// diagonal entry 0 (a multiplier's row): KLU pivots off the diagonal. The
+// neighbours' part is skew-symmetric, so the matrix is well conditioned
+// (singular values of order `diagonal` and above).
+SparseMatrix weak_diagonal_grid(int m, double diagonal) {
+  Triplets t;
+  const auto id = [m](int i, int k) { return i * m + k; };
+  for (int i = 0; i < m; ++i)
+    for (int k = 0; k < m; ++k) {
+      const int r = id(i, k);
+      t.emplace_back(r, r, r == 0 ? 0.0 : diagonal);
+      const int nb[4][2] = {{i - 1, k}, {i + 1, k}, {i, k - 1}, {i, k + 1}};
+      for (const auto& c : nb)
+        if (c[0] >= 0 && c[0] < m && c[1] >= 0 && c[1] < m) {
+          const int o = id(c[0], c[1]), lo = std::min(r, o), hi = std::max(r, o);
+          t.emplace_back(r, o, (r < o ? 1.0 : -1.0) * (1.0 + 0.3 * std::sin(1.7 * lo + 0.9 * hi)));
+        }
+    }
+  SparseMatrix j(m * m, m * m);
+  j.setFromTriplets(t.begin(), t.end());
+  j.makeCompressed();
+  return j;
+}
+
+// Auto decides by KLU's estimate of a factorization's flops, which assumes
+// pivots on the diagonal. Where a fresh factorization pivots off it (the
+// multipliers' zero diagonal beside massless rows: the modified mass on a
+// ring of 2*10^4 dofs did 4x the run time in KLU, docs/performance.md §6)
+// and does kPivotFill times the estimate or more, at or above the UMFPACK
+// threshold, UMFPACK takes the pattern; the ratio scales the estimates of
+// later patterns with a zero diagonal, in this solver and in one it is
+// handed to, not those of patterns with a full diagonal.
+TEST(KluRows, AutoGivesUmfpackThePatternsKluPivotingFills) {
+  const auto ctx = sundials::make_context();
+  struct Run {
+    long klu_factorizations, umfpack_factorizations, switches;
+    KluSolver::Backend backend;
+    double flops, fill, error;
+  };
+  const auto run = [&](KluSolver& lu, const SparseMatrix& j) {
+    const long n = j.rows();
+    SUNMatrix a = SUNSparseMatrix(n, n, j.nonZeros(), CSC_MAT, ctx.get());
+    Vec exact(n), b(n), x(n);
+    for (long i = 0; i < n; ++i) exact[i] = std::cos(0.37 * double(i)) + 0.5;
+    b = j * exact;
+    N_Vector nb = N_VMake_Serial(n, b.data(), ctx.get());
+    N_Vector nx = N_VMake_Serial(n, x.data(), ctx.get());
+    lu.load(j, a);
+    EXPECT_EQ(SUNLinSolSetup(lu.get(), a), SUNLS_SUCCESS);
+    EXPECT_EQ(SUNLinSolSolve(lu.get(), a, nx, nb, 0.0), SUNLS_SUCCESS);
+    const auto& c = lu.counters();
+    Run r{c.factorizations - c.umfpack_factorizations,
+          c.umfpack_factorizations,
+          c.pivot_fill_switches,
+          lu.backend_in_use(),
+          lu.flops_per_unknown(),
+          lu.pivot_fill(),
+          (x - exact).cwiseAbs().maxCoeff() / exact.cwiseAbs().maxCoeff()};
+    N_VDestroy(nb);
+    N_VDestroy(nx);
+    SUNMatDestroy(a);
+    return r;
+  };
+  const auto auto_solver = [&](double umfpack_flops) {
+    return std::make_unique<KluSolver>(ctx.get(), KluSolver::Ordering::Amd,
+                                       KluSolver::Pivoting::Kept, KluSolver::Backend::Auto,
+                                       umfpack_flops);
+  };
+  const SparseMatrix weak = weak_diagonal_grid(20, 0.03);
+  // Out of UMFPACK's reach: KLU keeps it, and measures how it pivoted.
+  auto kept = auto_solver(1e30);
+  const Run k = run(*kept, weak);
+  EXPECT_EQ(k.backend, KluSolver::Backend::Klu);
+  EXPECT_EQ(k.switches, 0);
+  EXPECT_GE(k.fill, KluSolver::kPivotFill);
+  EXPECT_LE(k.error, 1e-10);
+  const double estimate = k.flops, measured = k.fill * k.flops;
+  std::printf("weak diagonal, 400 unknowns: estimated %.0f, measured %.0f flops per unknown\n",
+              estimate, measured);
+  // A threshold between the estimate and the measurement: KLU's first
+  // factorization, then UMFPACK for this pattern.
+  const double threshold = std::sqrt(estimate * measured);
+  auto lu = auto_solver(threshold);
+  Run r = run(*lu, weak);
+  EXPECT_EQ(r.backend, KluSolver::Backend::Umfpack);
+  EXPECT_EQ(r.switches, 1);
+  EXPECT_EQ(r.klu_factorizations, 1);
+  EXPECT_EQ(r.umfpack_factorizations, 1);
+  EXPECT_DOUBLE_EQ(r.flops, measured);
+  EXPECT_LE(r.error, 1e-10);
+  SparseMatrix weak2 = weak;
+  for (long i = 1; i < weak2.rows(); ++i) weak2.coeffRef(i, i) *= 2.0;
+  r = run(*lu, weak2);  // the same pattern, other values: UMFPACK only
+  EXPECT_EQ(r.klu_factorizations, 1);
+  EXPECT_EQ(r.umfpack_factorizations, 2);
+  EXPECT_LE(r.error, 1e-10);
+  // A solver for another size, handed the ratio: UMFPACK at once.
+  auto next = auto_solver(threshold);
+  next->set_pivot_fill(lu->pivot_fill());
+  r = run(*next, weak_diagonal_grid(21, 0.03));
+  EXPECT_EQ(r.backend, KluSolver::Backend::Umfpack);
+  EXPECT_EQ(r.klu_factorizations, 0);
+  EXPECT_EQ(r.switches, 0);
+  EXPECT_LE(r.error, 1e-10);
+  // A pattern with a full diagonal is estimated as it is, handed the ratio
+  // or not; a diagonally dominant one pivots on its diagonal and stays KLU.
+  const SparseMatrix full = block_matrix(8);
+  auto plain = auto_solver(threshold), handed = auto_solver(threshold);
+  handed->set_pivot_fill(lu->pivot_fill());
+  const Run p = run(*plain, full), h = run(*handed, full);
+  EXPECT_EQ(h.flops, p.flops);
+  EXPECT_EQ(h.backend, p.backend);
+  auto dominant = auto_solver(threshold);
+  r = run(*dominant, weak_diagonal_grid(20, 10.0));
+  EXPECT_EQ(r.backend, KluSolver::Backend::Klu);
+  EXPECT_EQ(r.fill, 1.0);
+  EXPECT_LE(r.error, 1e-10);
+}
+
+}  // namespace
+}  // namespace emdae

@@ -62,7 +62,11 @@ std::string linear_solver_text(const KluSolver::Counters& c) {
                     plural(c.refactorizations, "refactorization", "refactorizations"));
   if (c.umfpack_factorizations > 0)
     parts.push_back("UMFPACK " +
-                    plural(c.umfpack_factorizations, "factorization", "factorizations"));
+                    plural(c.umfpack_factorizations, "factorization", "factorizations") +
+                    (c.pivot_fill_switches > 0
+                         ? fmt::format(" ({} after KLU's pivoting filled)",
+                                       plural(c.pivot_fill_switches, "pattern", "patterns"))
+                         : std::string()));
   if (c.amg_setups > 0)
     parts.push_back(
         fmt::format("AMG {}, GMRES {} ({:.1f} iterations per solve){}",
@@ -353,6 +357,8 @@ nlohmann::ordered_json to_json(const Summary& s) {
                           // What UMFPACK's dense kernels ran on: the Auto
                           // threshold and UMFPACK's round-off depend on it.
                           {"blas", KluSolver::openblas_loaded() ? "openblas" : "other"}};
+  if (const auto& c = s.linear_solver; c.pivot_fill_switches > 0)
+    j["linear_solver"]["pivot_fill_switches"] = c.pivot_fill_switches;
   j["cpu_seconds"] = s.cpu_seconds;
   j["energy_initial"] = s.energy_initial;
   j["energy_rel_error_max"] = s.energy_rel_error_max;
