@@ -253,7 +253,7 @@ ConsistentStart consistent_start(const System& s, double t, const Vec& q, const 
 void IdaStepper::Impl::allocate(double t, const Vec& y0) {
   if (mem) retire_counters();
   mem.reset();
-  if (klu) klu_done += klu->counters();
+  if (klu) klu_done += klu->counters(), pivot_fill = klu->pivot_fill();
   klu.reset();
   jmat.reset();
   m = m_sys + static_cast<int>(active.size());
@@ -274,6 +274,7 @@ void IdaStepper::Impl::allocate(double t, const Vec& y0) {
   klu = std::make_unique<KluSolver>(ctx.get(), KluSolver::Ordering::Colamd,
                                     KluSolver::Pivoting::EverySetup, set.linear_solver,
                                     set.umfpack_flops);
+  klu->set_pivot_fill(pivot_fill);
 }
 
 // IDA's own first step makes ||h0 y'||_WRMS = 1/2, which at tight

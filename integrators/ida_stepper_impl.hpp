@@ -74,6 +74,7 @@ struct IdaStepper::Impl {
   sundials::Matrix jmat;
   std::unique_ptr<KluSolver> klu;
   KluSolver::Counters klu_done;  // of the solvers of earlier (re)starts
+  double pivot_fill = 1.0;       // what their last one measured of KLU's pivoting
   sundials::Memory<IDAFree> mem;
 
   bool need_restart = true;
