@@ -67,8 +67,10 @@ struct KluSolver::Impl {
   double estimate_per_unknown = 0.0;  // the estimate itself, before pivot_fill
   // Measured / estimated flops of KLU's last fresh factorization of a
   // pattern with zero diagonal entries (the multipliers' rows: where KLU
-  // must pivot off the diagonal), applied to the estimates of later such
-  // patterns; patterns with a full diagonal are estimated as they are.
+  // must pivot off the diagonal; under COLAMD, IDA's ordering, the ratio
+  // also holds COLAMD's fill beyond AMD's estimate: what KLU really costs),
+  // applied to the estimates of later such patterns; patterns with a full
+  // diagonal are estimated as they are.
   double pivot_fill = 1.0;
   bool zero_diagonal = false;  // of the pattern analysed last
   long last_flag = SUNLS_SUCCESS;
@@ -203,12 +205,12 @@ struct KluSolver::Impl {
         free_symbolic();
         flops_per_unknown = measured;
         in_use = Backend::Umfpack;
-        ++counters.pivot_fill_switches;
         if (umfpack_dl_symbolic(n, n, ap, ai, ax, &umf_symbolic, umf_control, umf_info) !=
             UMFPACK_OK) {
           free_symbolic();
           return SUNLS_PACKAGE_FAIL_UNREC;
         }
+        ++counters.pivot_fill_switches;
         return umf_factor(ap, ai, ax);
       }
     }

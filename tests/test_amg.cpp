@@ -623,6 +623,8 @@ TEST(KluRows, AutoGivesUmfpackThePatternsKluPivotingFills) {
   const Run p = run(*plain, full), h = run(*handed, full);
   EXPECT_EQ(h.flops, p.flops);
   EXPECT_EQ(h.backend, p.backend);
+  EXPECT_EQ(p.fill, 1.0);               // nothing learnt from a full diagonal ...
+  EXPECT_EQ(h.fill, lu->pivot_fill());  // ... nor forgotten
   auto dominant = auto_solver(threshold);
   r = run(*dominant, weak_diagonal_grid(20, 10.0));
   EXPECT_EQ(r.backend, KluSolver::Backend::Klu);
