@@ -24,6 +24,7 @@
 #include "integrators/amg.hpp"
 #include "integrators/energy_momentum.hpp"
 #include "integrators/klu_solver.hpp"
+#include "integrators/newton.hpp"
 #include "integrators/stepper.hpp"
 #include "integrators/sundials_support.hpp"
 #include "run/run.hpp"
@@ -625,6 +626,35 @@ TEST(KluRows, AutoGivesUmfpackThePatternsKluPivotingFills) {
   EXPECT_EQ(h.backend, p.backend);
   EXPECT_EQ(p.fill, 1.0);               // nothing learnt from a full diagonal ...
   EXPECT_EQ(h.fill, lu->pivot_fill());  // ... nor forgotten
+  // The Newton solve makes a solver for every size and hands the ratio
+  // on: a linear problem A x = b on the 400-unknown grid, then on the
+  // 441-unknown one, factors the second on UMFPACK without KLU.
+  struct Linear : NewtonProblem {
+    SparseMatrix a;
+    Vec b;
+    int size() const override { return static_cast<int>(a.rows()); }
+    void residual(const Vec& x, Vec& f) override { f = a * x - b; }
+    void jacobian(const Vec&, SparseMatrix& j) override { j = a; }
+  };
+  NewtonSettings ns;
+  ns.umfpack_flops = threshold;
+  ns.jacobian_reuse = 1;
+  NewtonSolver newton(ns);
+  for (const int m : {20, 21}) {
+    Linear problem;
+    problem.a = weak_diagonal_grid(m, 0.03);
+    Vec exact(problem.a.rows());
+    for (Eigen::Index i = 0; i < exact.size(); ++i) exact[i] = std::cos(0.37 * double(i)) + 0.5;
+    problem.b = problem.a * exact;
+    Vec x = Vec::Zero(exact.size());
+    const NewtonResult nr = newton.solve(problem, x, Vec::Ones(exact.size()));
+    EXPECT_TRUE(nr.converged) << nr.message;
+    EXPECT_LE((x - exact).cwiseAbs().maxCoeff(), 1e-8);
+    const KluSolver::Counters c = newton.klu_counters();
+    EXPECT_EQ(c.factorizations - c.umfpack_factorizations, 1) << m;  // the first grid's only
+    EXPECT_EQ(c.pivot_fill_switches, 1) << m;
+    EXPECT_GE(c.umfpack_factorizations, m == 20 ? 1 : 2) << m;
+  }
   auto dominant = auto_solver(threshold);
   r = run(*dominant, weak_diagonal_grid(20, 10.0));
   EXPECT_EQ(r.backend, KluSolver::Backend::Klu);
