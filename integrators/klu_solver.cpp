@@ -141,6 +141,14 @@ struct KluSolver::Impl {
     return SUNLS_SUCCESS;
   }
 
+  // UMFPACK's analysis of this pattern; on failure nothing is kept.
+  bool umf_analyse(long n, long* ap, long* ai, double* ax) {
+    if (umfpack_dl_symbolic(n, n, ap, ai, ax, &umf_symbolic, umf_control, umf_info) == UMFPACK_OK)
+      return true;
+    free_symbolic();
+    return false;
+  }
+
   // KLU's estimate of a factorization's flops on the analysed pattern: its
   // AMD ordering's count (COLAMD gives none, so a pattern analysed with it
   // is ordered once more with AMD for the estimate).
@@ -205,11 +213,7 @@ struct KluSolver::Impl {
         free_symbolic();
         flops_per_unknown = measured;
         in_use = Backend::Umfpack;
-        if (umfpack_dl_symbolic(n, n, ap, ai, ax, &umf_symbolic, umf_control, umf_info) !=
-            UMFPACK_OK) {
-          free_symbolic();
-          return SUNLS_PACKAGE_FAIL_UNREC;
-        }
+        if (!umf_analyse(n, ap, ai, ax)) return SUNLS_PACKAGE_FAIL_UNREC;
         ++counters.pivot_fill_switches;
         return umf_factor(ap, ai, ax);
       }
@@ -241,9 +245,9 @@ struct KluSolver::Impl {
         if (!symbolic) return SUNLS_PACKAGE_FAIL_UNREC;
         if (backend == Backend::Auto || common.ordering == static_cast<int>(Ordering::Amd))
           flops_per_unknown = estimate_per_unknown = estimated_flops(n, ap, ai) / double(n);
-        zero_diagonal = has_zero_diagonal(n, ap, ai, ax);
-        if (backend == Backend::Auto && zero_diagonal) flops_per_unknown *= pivot_fill;
         if (backend == Backend::Auto) {
+          zero_diagonal = has_zero_diagonal(n, ap, ai, ax);
+          if (zero_diagonal) flops_per_unknown *= pivot_fill;
           take_amg = flops_per_unknown >= kAmgFlops && Amg::applies(n, ap, ai, ax, 2);
           if (take_amg || flops_per_unknown >= umfpack_flops) free_symbolic();
           if (!take_amg && flops_per_unknown >= umfpack_flops) in_use = Backend::Umfpack;
@@ -255,13 +259,8 @@ struct KluSolver::Impl {
         return amg_build_or_lu(ap, ai, ax);
       }
       amg.clear();
-      if (in_use == Backend::Umfpack) {
-        if (umfpack_dl_symbolic(n, n, ap, ai, ax, &umf_symbolic, umf_control, umf_info) !=
-            UMFPACK_OK) {
-          free_symbolic();
-          return SUNLS_PACKAGE_FAIL_UNREC;
-        }
-      }
+      if (in_use == Backend::Umfpack && !umf_analyse(n, ap, ai, ax))
+        return SUNLS_PACKAGE_FAIL_UNREC;
       ++counters.analyses;
       return in_use == Backend::Umfpack ? umf_factor(ap, ai, ax) : factor(ap, ai, ax);
     }
@@ -299,11 +298,7 @@ struct KluSolver::Impl {
     amg.clear();
     ++counters.amg_fallbacks;
     in_use = Backend::Umfpack;
-    if (umfpack_dl_symbolic(n_in_use, n_in_use, ap, ai, ax, &umf_symbolic, umf_control, umf_info) !=
-        UMFPACK_OK) {
-      free_symbolic();
-      return SUNLS_PACKAGE_FAIL_UNREC;
-    }
+    if (!umf_analyse(n_in_use, ap, ai, ax)) return SUNLS_PACKAGE_FAIL_UNREC;
     return umf_factor(ap, ai, ax);
   }
 
