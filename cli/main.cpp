@@ -12,11 +12,11 @@ int main(int argc, char** argv) {
 #if defined(__GLIBC__) && !defined(__SANITIZE_ADDRESS__)
   // UMFPACK allocates and frees its factors' memory at every factorization.
   // Above glibc's mmap threshold each such block is a fresh mapping that the
-  // kernel zeroes page by page: 4.8 s of system time in 28 s on the 20k-dof
-  // modified-mass ring impact. Blocks up to 32 MB come from the heap instead,
-  // and up to 256 MB of freed heap is kept for the next factorization:
-  // 0.81 of the CPU time there; peak memory at 10^6 dofs 2.85 kB per dof
-  // instead of 2.82 (docs/performance.md §11).
+  // kernel zeroes page by page (6.2 s of system time in 40 s on the 20k-dof
+  // modified-mass ring impact). Blocks up to 32 MB come from the heap
+  // instead, and up to 256 MB of freed heap is kept for the next
+  // factorization: 0.85 of the CPU time there, peak memory at 10^6 dofs
+  // 2.85 kB per dof instead of 2.82 (docs/performance.md §11).
   mallopt(M_MMAP_THRESHOLD, 32 << 20);
   mallopt(M_TRIM_THRESHOLD, 256 << 20);
 #endif
