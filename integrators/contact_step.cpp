@@ -105,6 +105,14 @@ Vec carried_multipliers(const std::vector<int>& active, const Vec& lambda, const
   return out;
 }
 
+// The positions in `active` of the nodes `ids` that are in it.
+std::vector<int> positions_in(const std::vector<int>& active, const std::vector<int>& ids) {
+  std::vector<int> k;
+  for (std::size_t i = 0; i < active.size(); ++i)
+    if (contains(ids, active[i])) k.push_back(static_cast<int>(i));
+  return k;
+}
+
 }  // namespace
 
 // A state at the end of a trial over [0, tau], with the gaps and gap rates
@@ -198,8 +206,8 @@ StepStats ContactStepper::substep(SubstepScheme& scheme, State& s, double h) {
   // any other's. Under the other treatments the retry would repeat the
   // same solve.
   const State start = s;
-  // Nodes that entered at a jump of their function keep the gap they have
-  // while they stay active (see locate()).
+  // Nodes that keep their gap do so while they stay active (see
+  // settle_changed_functions()).
   kept_.erase(
       std::remove_if(kept_.begin(), kept_.end(), [&](int id) { return !set_.is_active(s, id); }),
       kept_.end());
@@ -257,9 +265,20 @@ StepStats ContactStepper::substep(SubstepScheme& scheme, State& s, double h) {
       total.converged = false;
       return total;
     }
-    // Nodes found inside at the start whose pull to 0 cost energy keep
-    // their gap instead, and the sub-step is solved again.
-    if (keep_costly_entries(s, trial)) continue;
+    // Nodes found inside at the start whose pull to 0 did work: the work
+    // is taken back by a velocity update when the sub-step is accepted.
+    const std::vector<int> pulled = costly_entries(s, trial);
+    if (!pulled.empty()) {
+      // Taken back only if it can be: else they keep their gap at once.
+      State probe = trial;
+      StepStats probe_stats = r;
+      if (!velocity_update(scheme, s, probe, positions_in(trial.active, pulled), probe_stats,
+                           false)) {
+        for (int id : pulled) keep_gap(id);
+        have_guess = false;
+        continue;
+      }
+    }
     // A re-solve with a changed active set starts from this trial's end:
     // positions, and the multipliers of the nodes that stay active (one or
     // two Newton iterations instead of three or four from the predictor).
@@ -276,12 +295,21 @@ StepStats ContactStepper::substep(SubstepScheme& scheme, State& s, double h) {
     // 2. Inactive nodes penetrating at the end.
     const std::vector<int> penetrating = set_.penetrating(s, trial.q);
     if (penetrating.empty()) {
-      if (impact_ == ImpactTreatment::VelocityUpdate) {
-        std::vector<int> entered;  // entered open: their target was 0
-        for (std::size_t k = 0; k < s.active.size(); ++k)
-          if (targets.closed[static_cast<Eigen::Index>(k)] == 0.0 && !set_.algebraic(s.active[k]))
-            entered.push_back(static_cast<int>(k));
-        if (!entered.empty()) velocity_update(scheme, s, trial, entered, r);
+      // Pulled to 0 (target 0, not closed at the start): under the
+      // velocity update every such node, under the other treatments the
+      // nodes found inside whose pull did work.
+      std::vector<int> entered;
+      for (std::size_t k = 0; k < s.active.size(); ++k)
+        if (targets.closed[static_cast<Eigen::Index>(k)] == 0.0 && !set_.algebraic(s.active[k]) &&
+            (impact_ == ImpactTreatment::VelocityUpdate || contains(pulled, s.active[k])))
+          entered.push_back(static_cast<int>(k));
+      if (!entered.empty() && !velocity_update(scheme, s, trial, entered, r) && !pulled.empty()) {
+        // The work cannot be taken back along their constraint forces:
+        // those nodes keep their gap instead, and the sub-step is solved
+        // again.
+        for (int id : pulled) keep_gap(id);
+        have_guess = false;
+        continue;
       }
       return accept(trial, r);
     }
@@ -332,6 +360,14 @@ StepStats ContactStepper::substep(SubstepScheme& scheme, State& s, double h) {
         if (!set_.is_active(s, id)) activate_candidate(s, id);
       continue;
     }
+    if (!pulled.empty()) {
+      const std::vector<int> entered = positions_in(located.active, pulled);  // still active
+      if (!entered.empty() && !velocity_update(scheme, s, located, entered, at_impact)) {
+        for (int id : pulled) keep_gap(id);
+        have_guess = false;
+        continue;
+      }
+    }
     return accept(located, at_impact);
   }
   total.converged = false;
@@ -351,11 +387,16 @@ StepStats ContactStepper::substep(SubstepScheme& scheme, State& s, double h) {
 //  - a node inside at the start (Phi_0 < -tol) is noted in inside_. If it
 //    is active, or becomes active in the sub-step (it still penetrates at
 //    the end: re-entered for the whole sub-step), the sub-step is solved
-//    pulling it to 0; where that did more work than kInsideWork of the
-//    energy (keep_costly_entries), or Newton could not do it, the node keeps
-//    the gap it has instead while it stays active, as at an engagement jump
-//    (locate()): no work, the gap reported as the violation it is. One that
-//    leaves the other body by itself within the sub-step never enters.
+//    pulling it to 0. Where that did more work than kInsideWork of the
+//    energy (costly_entries), the work is taken back when the sub-step is
+//    accepted, by a velocity update along the pulled nodes' constraint
+//    forces (velocity_update(): both momenta unchanged), as the treatment
+//    VelocityUpdate does for an entry. Where it cannot be (the energy is not
+//    in the velocities along those forces: a sliver's pull strains the
+//    master's corner, or moves it off), or Newton could not do the pull,
+//    the node keeps the gap it has instead while it stays active: no work,
+//    the gap reported as the violation it is. One that leaves the other
+//    body by itself within the sub-step never enters.
 // Nodes that entered open in this step's treatment, algebraic and penalized
 // nodes, and nodes that already keep their gap are left alone.
 bool ContactStepper::keep_gap(int id) {
@@ -382,20 +423,20 @@ void ContactStepper::settle_changed_functions(State& s) {
   }
 }
 
-bool ContactStepper::keep_costly_entries(const State& s, const State& end) {
-  if (inside_.empty()) return false;
+std::vector<int> ContactStepper::costly_entries(const State& s, const State& end) const {
+  std::vector<int> costly;
+  if (inside_.empty()) return costly;
   const Eigen::Index n_static = end.lambda.size() - static_cast<Eigen::Index>(end.active.size());
   double energy = -1.0;
-  bool kept = false;
   for (std::size_t k = 0; k < s.active.size() && k < end.active.size(); ++k) {
     const int id = s.active[k];
     if (!contains(inside_, id) || contains(kept_, id)) continue;
     if (energy < 0.0) energy = std::abs(measure(system_, s.q, s.v, s.t).total());
     const double work =
         std::abs(end.lambda[n_static + static_cast<Eigen::Index>(k)] * set_.gap(id, s.q));
-    if (work > kInsideWork * energy) kept |= keep_gap(id);
+    if (work > kInsideWork * energy) costly.push_back(id);
   }
-  return kept;
+  return costly;
 }
 
 ContactStepper::Outcome ContactStepper::locate(SubstepScheme& scheme, State& s, const State& end,
@@ -476,16 +517,14 @@ ContactStepper::Outcome ContactStepper::locate(SubstepScheme& scheme, State& s, 
       // function appeared within it (engaged only now: a master segment's
       // end moving over its slave segments, +infinity before) with a gap
       // already below -tol. Its function is continuous (the weighted gap of
-      // the sliver that lies opposite), only its engagement is not: pulling
-      // it to 0 in the next sub-step would do the work lambda Phi, up to 85
-      // times the energy (tests/test_impact_sweep.cpp). It keeps that gap
-      // while it stays active instead.
-      for (int id : open) {
-        const double g_id = set_.gap(id, sub.q);
-        if (g_id > tol) continue;
-        activate_candidate(sub, id);
-        if (g_id < -tol) keep_gap(id);
-      }
+      // the sliver that lies opposite), only its engagement is not. It
+      // enters with that gap, and the next sub-step finds it inside
+      // (settle_changed_functions): pulled to 0 where the work of the pull
+      // can be taken back by a velocity update, else (the work of a sliver's
+      // multiplier was up to 85 times the energy, tests/test_impact_sweep.cpp)
+      // it keeps that gap while it stays active.
+      for (int id : open)
+        if (set_.gap(id, sub.q) <= tol) activate_candidate(sub, id);
       s = std::move(sub);
       accepted = r;
       ++counters_.impacts;
@@ -504,8 +543,9 @@ ContactStepper::Outcome ContactStepper::locate(SubstepScheme& scheme, State& s, 
   return Outcome::Failed;
 }
 
-void ContactStepper::velocity_update(SubstepScheme& scheme, const State& start, State& end,
-                                     const std::vector<int>& entered, StepStats& stats) {
+bool ContactStepper::velocity_update(SubstepScheme& scheme, const State& start, State& end,
+                                     const std::vector<int>& entered, StepStats& stats,
+                                     bool count) {
   const int n = system_.n_dofs();
   const Eigen::Index n_static = system_.n_constraints();
   // d = sum over the entering nodes of -lambda_A grad Phi_A(q_1).
@@ -525,16 +565,16 @@ void ContactStepper::velocity_update(SubstepScheme& scheme, const State& start, 
   const Vec u = scheme.inverse_mass(d);
   const Vec mu = system_.mass() * u;
   const double a = u.dot(mu), b = end.v.dot(mu);
-  if (!(a > 0.0)) return;
+  if (!(a > 0.0)) return false;
   const double h0 = measure(system_, start.q, start.v, start.t).total();
   const double h1 = measure(system_, end.q, end.v, end.t).total();
   const double deficit = h0 + stats.external_work - h1;
   const double disc = b * b + 2.0 * a * deficit;
-  if (disc < 0.0) return;  // cannot be removed along d: keep the step as it is
+  if (disc < 0.0) return false;  // cannot be removed along d
   // The root that separates (s > 0 adds velocity along the contact forces).
   const double sc = (-b + std::sqrt(disc)) / a;
   end.v += sc * u;
-  ++counters_.velocity_updates;
+  if (count) ++counters_.velocity_updates;
   // What the supports gave: on prescribed rows u = 0, and the momentum
   // change s M u differs there from the (zero-sum) s d.
   if (!system_.prescribed().empty() && stats.external_impulse.size() > 0) {
@@ -545,6 +585,7 @@ void ContactStepper::velocity_update(SubstepScheme& scheme, const State& start, 
     stats.external_angular_impulse += moment;
   }
   (void)n;
+  return true;
 }
 
 }  // namespace emdae

@@ -10,7 +10,8 @@
 // release in it). A node inside or apart at the start by more than the gap
 // tolerance (its function changed when the step's contact was prepared) is
 // settled first (settle_changed_functions in contact_step.cpp: apart, it is
-// released; inside, it keeps its gap where pulling it to 0 costs energy).
+// released; inside, it is pulled to 0 and the work of the pull taken back by
+// a velocity update, or, where that cannot be done, it keeps its gap).
 // A node open at the start that penetrates at the end is an impact,
 // treated as ImpactTreatment says:
 //
@@ -104,11 +105,15 @@ class ContactStepper {
   // Adds id to kept_ (it keeps its gap while active); false if it was there.
   bool keep_gap(int id);
   void settle_changed_functions(State& s);
-  bool keep_costly_entries(const State& s, const State& end);
+  // The nodes of inside_ active in `end` whose pull to 0 did more work
+  // than kInsideWork of the energy.
+  std::vector<int> costly_entries(const State& s, const State& end) const;
   Outcome locate(SubstepScheme& scheme, State& s, const State& end, double h,
                  std::vector<int>& pinned, StepStats& total, StepStats& accepted);
-  void velocity_update(SubstepScheme& scheme, const State& start, State& end,
-                       const std::vector<int>& entered, StepStats& stats);
+  // False if the energy cannot be restored along the entries' forces.
+  // count: add it to counters_ (not for a probe).
+  bool velocity_update(SubstepScheme& scheme, const State& start, State& end,
+                       const std::vector<int>& entered, StepStats& stats, bool count = true);
   Point point(double tau, const State& state, const std::vector<int>& ids) const;
 
   const System& system_;
@@ -116,13 +121,13 @@ class ContactStepper {
   ImpactTreatment impact_;
   ImpactCounters counters_;
   double last_h_ = 0.0;  // length of the last accepted sub-step
-  // Active nodes that entered at a jump of their function and keep their
-  // gap as target (locate()).
+  // Active nodes found inside whose pull to 0 could not be done or taken
+  // back (settle_changed_functions): they keep their gap as target.
   std::vector<int> kept_;
   bool keep_deep_ = false;  // keep_deep_entries() for the current step
   // Nodes found inside at the sub-step's start (settle_changed_functions),
-  // and the work, relative to the energy, above which pulling one to 0
-  // makes it keep its gap instead.
+  // and the work, relative to the energy, above which pulling one to 0 is
+  // taken back by a velocity update.
   std::vector<int> inside_;
   static constexpr double kInsideWork = 1e-12;
 };
