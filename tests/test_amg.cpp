@@ -662,5 +662,61 @@ TEST(KluRows, AutoGivesUmfpackThePatternsKluPivotingFills) {
   EXPECT_LE(r.error, 1e-10);
 }
 
+// The same switch where the fresh factorization comes after a
+// refactorization whose pivots degraded: a pattern first factored with a
+// strong diagonal (KLU pivots on it, nothing filled), then loaded with a
+// weak one. Refactored on the kept pivot order, its reciprocal condition
+// estimate drops, KLU pivots anew, measures the fill, and UMFPACK takes
+// the pattern.
+TEST(KluRows, AutoSwitchesAfterARefactorizationsPivotsDegrade) {
+  const auto ctx = sundials::make_context();
+  const SparseMatrix strong = weak_diagonal_grid(20, 10.0), weak = weak_diagonal_grid(20, 0.03);
+  const long n = strong.rows();
+  SUNMatrix a = SUNSparseMatrix(n, n, strong.nonZeros(), CSC_MAT, ctx.get());
+  Vec exact(n), b(n), x(n);
+  for (long i = 0; i < n; ++i) exact[i] = std::cos(0.37 * double(i)) + 0.5;
+  N_Vector nb = N_VMake_Serial(n, b.data(), ctx.get());
+  N_Vector nx = N_VMake_Serial(n, x.data(), ctx.get());
+  const auto solve = [&](KluSolver& lu, const SparseMatrix& j) {
+    b = j * exact;
+    lu.load(j, a);
+    EXPECT_EQ(SUNLinSolSetup(lu.get(), a), SUNLS_SUCCESS);
+    EXPECT_EQ(SUNLinSolSolve(lu.get(), a, nx, nb, 0.0), SUNLS_SUCCESS);
+    return (x - exact).cwiseAbs().maxCoeff() / exact.cwiseAbs().maxCoeff();
+  };
+  const auto make = [&](double umfpack_flops) {
+    return std::make_unique<KluSolver>(ctx.get(), KluSolver::Ordering::Amd,
+                                       KluSolver::Pivoting::Kept, KluSolver::Backend::Auto,
+                                       umfpack_flops);
+  };
+  // What the weak values fill, measured on a solver out of UMFPACK's reach.
+  auto probe = make(1e30);
+  EXPECT_LE(solve(*probe, weak), 1e-10);
+  const double estimate = probe->flops_per_unknown(), measured = probe->pivot_fill() * estimate;
+  ASSERT_GE(probe->pivot_fill(), KluSolver::kPivotFill);
+  const double threshold = std::sqrt(estimate * measured);
+
+  auto lu = make(threshold);
+  EXPECT_LE(solve(*lu, strong), 1e-10);
+  EXPECT_EQ(lu->backend_in_use(), KluSolver::Backend::Klu);  // pivots on the diagonal
+  EXPECT_LT(lu->pivot_fill(), KluSolver::kPivotFill);
+  EXPECT_EQ(lu->counters().factorizations, 1);
+  EXPECT_EQ(lu->counters().pivot_fill_switches, 0);
+  EXPECT_LE(solve(*lu, strong * 1.5), 1e-10);  // a refactorization
+  EXPECT_EQ(lu->counters().refactorizations, 1);
+
+  EXPECT_LE(solve(*lu, weak), 1e-10);
+  const KluSolver::Counters& c = lu->counters();
+  EXPECT_EQ(lu->backend_in_use(), KluSolver::Backend::Umfpack);
+  EXPECT_EQ(c.pivot_fill_switches, 1);
+  EXPECT_EQ(c.refactorizations, 1);  // the degraded one is not counted
+  EXPECT_EQ(c.factorizations - c.umfpack_factorizations, 2);
+  EXPECT_EQ(c.umfpack_factorizations, 1);
+  EXPECT_GE(lu->pivot_fill(), KluSolver::kPivotFill);
+  N_VDestroy(nb);
+  N_VDestroy(nx);
+  SUNMatDestroy(a);
+}
+
 }  // namespace
 }  // namespace emdae
