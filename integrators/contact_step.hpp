@@ -66,6 +66,11 @@ class SubstepScheme {
                                   const SolveGuess* guess) = 0;
   /// w = M^-1 f on the free dofs (zero on prescribed dofs).
   virtual Vec inverse_mass(const Vec& f) const = 0;
+  /// After a converged solve_substep: d q_1 / d h, the rate at which its
+  /// end positions move with the sub-step's length, by the implicit function
+  /// theorem on that solve's last Jacobian. Empty where the scheme cannot
+  /// give it.
+  virtual Vec end_rate() { return {}; }
 };
 
 /// Counters of the impact treatment, for benchmarks and tests.

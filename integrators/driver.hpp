@@ -36,11 +36,11 @@ struct RunOutcome {
 /// Where the loop is, between calls: what a checkpoint keeps so that a
 /// resumed loop goes on exactly as an uninterrupted one.
 struct DriverState {
-  double h = 0.0;          // the step the loop goes on with (0: time.dt)
-  int successes_at_h = 0;  // accepted steps at h since it was cut or grown
-  long steps = 0;          // accepted steps so far
+  double h = 0.0;              // the step the loop goes on with (0: time.dt)
+  int successes_at_h = 0;      // accepted steps at h since it was cut or grown
+  long steps = 0;              // accepted steps so far
   long last_resort_steps = 0;  // steps tried again with Stepper::last_resort
-  long pause_at = 0;       // > 0: return (RunOutcome::paused) once steps reaches it
+  long pause_at = 0;           // > 0: return (RunOutcome::paused) once steps reaches it
 };
 
 using StepObserver = std::function<void(const State&, const AcceptedStep&)>;

@@ -141,6 +141,8 @@ StepStats MidpointFamilyStepper::solve_substep(State& state, double dt, const Ve
   const Vec& lambda0 = guess && guess->lambda.size() == m ? guess->lambda : state.lambda;
   x.tail(m) = lambda0.size() == m ? Vec(lambda0 / problem.kappa()) : Vec::Zero(m);
   const NewtonResult r = newton_.solve(problem, x, problem.scale());
+  last_.valid = r.converged;
+  if (r.converged) last_.start = state, last_.h = dt, last_.targets = targets, last_.x = x;
   x.tail(m) *= problem.kappa();
   StepStats stats;
   stats.converged = r.converged;
@@ -183,6 +185,28 @@ double MidpointFamilyStepper::driven_work(const Vec& q0, const Vec& q1, const Ve
     work -= lambda[l] * g.dot(l1 - l0);
   }
   return work;
+}
+
+// R(x(h), h) = 0 along the solutions, so dx/dh = -J^-1 dR/dh at fixed x;
+// dR/dh by central differences of the residual in h (every dependence on
+// h: the inertia rows, loads and driven constraints at t0 + h, the rows'
+// scaling), J the solve's last factorization (of its next-to-last iterate:
+// a relative error of the order of that iterate's, below 1e-6 in a
+// converged solve).
+Vec MidpointFamilyStepper::end_rate() {
+  if (!last_.valid) return {};
+  const int n = system_.n_dofs();
+  const std::vector<const Term*> extra = active_terms(last_.start.active);
+  const double h = last_.h, dh = 1e-5 * h;
+  Vec f_plus, f_minus, d;
+  StepProblem(system_, kind_, last_.start, h + dh, extra, last_.targets, stiffness_diag_,
+              full_stiffness_diag_, &pattern_)
+      .residual(last_.x, f_plus);
+  StepProblem(system_, kind_, last_.start, h - dh, extra, last_.targets, stiffness_diag_,
+              full_stiffness_diag_, &pattern_)
+      .residual(last_.x, f_minus);
+  if (!newton_.solve_with_last_jacobian(-(f_plus - f_minus) / (2.0 * dh), d)) return {};
+  return d.head(n);
 }
 
 Vec MidpointFamilyStepper::inverse_mass(const Vec& f) const {

@@ -66,6 +66,7 @@ class MidpointFamilyStepper : public Stepper, public SubstepScheme {
 
   StepStats solve_substep(State& s, double h, const Vec& targets, const SolveGuess* guess) override;
   Vec inverse_mass(const Vec& f) const override;
+  Vec end_rate() override;
 
  private:
   void velocity_from_momentum_balance(const State& start, const Vec& q1, const Vec& force,
@@ -88,6 +89,13 @@ class MidpointFamilyStepper : public Stepper, public SubstepScheme {
   SparseMatrix m_fp_;      // M restricted to free rows and prescribed columns
   MassInverse m_ff_;       // M^-1 on the free dofs
   TermWorkspace work_ws_;  // for driven_work
+  // The last converged solve_substep, for end_rate().
+  struct LastSolve {
+    bool valid = false;
+    State start;
+    double h = 0.0;
+    Vec targets, x;
+  } last_;
 };
 
 }  // namespace emdae

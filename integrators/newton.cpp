@@ -3,6 +3,7 @@
 #include <kinsol/kinsol.h>
 #include <nvector/nvector_serial.h>
 #include <sundials/sundials_context.h>
+#include <sundials/sundials_linearsolver.h>
 #include <sunmatrix/sunmatrix_sparse.h>
 
 #include <algorithm>
@@ -106,6 +107,7 @@ struct NewtonSolver::Impl {
   static constexpr long kAutoNewtonSolves = 100;
   long window_solves = 0, window_jacobians = 0, newton_left = 0;
   long jacobian_evaluations = 0;  // by jacobian_cb, over all solves
+  bool factored_last_solve = false;
 
   int auto_reuse(const NewtonSettings& s) {
     if (klu->flops_per_unknown() < s.reuse_flops_per_unknown) return 1;
@@ -262,6 +264,7 @@ NewtonResult NewtonSolver::solve(NewtonProblem& problem, Vec& x, const Vec& resi
   m.problem = nullptr;
   x = Eigen::Map<const Vec>(N_VGetArrayPointer(m.u.get()), n);
   if (auto_reuse) m.watch_reuse(m.jacobian_evaluations - jacobians_before);
+  m.factored_last_solve = m.jacobian_evaluations > jacobians_before;
 
   NewtonResult r;
   r.iterations = static_cast<int>(iters);
@@ -276,6 +279,19 @@ NewtonResult NewtonSolver::solve(NewtonProblem& problem, Vec& x, const Vec& resi
   r.converged = polished || stalled_below_tolerance;
   if (!r.converged && !m.last_message.empty()) r.message += " (" + m.last_message + ")";
   return r;
+}
+
+bool NewtonSolver::solve_with_last_jacobian(const Vec& b, Vec& d) {
+  Impl& m = *impl_;
+  if (!m.factored_last_solve || !m.klu || b.size() != m.n) return false;
+  d = Vec::Zero(m.n);
+  Vec rhs = b;
+  N_Vector nb = N_VMake_Serial(m.n, rhs.data(), m.ctx.get());
+  N_Vector nd = N_VMake_Serial(m.n, d.data(), m.ctx.get());
+  const int flag = SUNLinSolSolve(m.klu->get(), m.jmat.get(), nd, nb, 0.0);
+  N_VDestroy(nb);
+  N_VDestroy(nd);
+  return flag == SUNLS_SUCCESS && d.allFinite();
 }
 
 }  // namespace emdae

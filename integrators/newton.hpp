@@ -86,6 +86,11 @@ class NewtonSolver {
   /// KINSOL has returned (they never cross the C library).
   NewtonResult solve(NewtonProblem& problem, Vec& x, const Vec& residual_scale);
 
+  /// d = J^-1 b with the factorization of the last solve's last Jacobian
+  /// (for the sensitivity of its solution to a parameter). False if that
+  /// solve evaluated no Jacobian (its guess was accepted) or the linear
+  /// solve fails.
+  bool solve_with_last_jacobian(const Vec& b, Vec& d);
   const NewtonSettings& settings() const { return settings_; }
   /// What KLU did so far (analyses, factorizations, refactorizations), over
   /// every system size this solver has seen.
