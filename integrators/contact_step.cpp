@@ -277,14 +277,20 @@ StepStats ContactStepper::substep(SubstepScheme& scheme, State& s, double h) {
     // Nodes found inside at the start whose pull to 0 did work: the work
     // is taken back by a velocity update when the sub-step is accepted.
     const std::vector<int> pulled = costly_entries(s, trial);
+    // Where their work cannot be taken back along their constraint forces,
+    // the pulled nodes keep their gap instead and the sub-step is solved
+    // again.
+    const auto keep_pulled = [&] {
+      for (int id : pulled) keep_gap(id);
+      have_guess = false;
+    };
     if (!pulled.empty()) {
       // Taken back only if it can be: else they keep their gap at once.
       State probe = trial;
       StepStats probe_stats = r;
       if (!velocity_update(scheme, s, probe, positions_in(trial.active, pulled), probe_stats,
                            false)) {
-        for (int id : pulled) keep_gap(id);
-        have_guess = false;
+        keep_pulled();
         continue;
       }
     }
@@ -313,11 +319,7 @@ StepStats ContactStepper::substep(SubstepScheme& scheme, State& s, double h) {
             (impact_ == ImpactTreatment::VelocityUpdate || contains(pulled, s.active[k])))
           entered.push_back(static_cast<int>(k));
       if (!entered.empty() && !velocity_update(scheme, s, trial, entered, r) && !pulled.empty()) {
-        // The work cannot be taken back along their constraint forces:
-        // those nodes keep their gap instead, and the sub-step is solved
-        // again.
-        for (int id : pulled) keep_gap(id);
-        have_guess = false;
+        keep_pulled();
         continue;
       }
       return accept(trial, r);
@@ -372,8 +374,7 @@ StepStats ContactStepper::substep(SubstepScheme& scheme, State& s, double h) {
     if (!pulled.empty()) {
       const std::vector<int> entered = positions_in(located.active, pulled);  // still active
       if (!entered.empty() && !velocity_update(scheme, s, located, entered, at_impact)) {
-        for (int id : pulled) keep_gap(id);
-        have_guess = false;
+        keep_pulled();
         continue;
       }
     }
@@ -549,7 +550,13 @@ ContactStepper::Outcome ContactStepper::locate(SubstepScheme& scheme, State& s, 
         reentered = true;
       }
     if (reentered) return Outcome::Retry;
-    const double g = set_.min_gap(open, sub.q);
+    // The least open gap, and whose it is (for its rate below).
+    double g = std::numeric_limits<double>::infinity();
+    int least = -1;
+    for (int id : open) {
+      const double g_id = set_.gap(id, sub.q);
+      if (g_id < g) g = g_id, least = id;
+    }
     // A jump (an engagement within the bracket: the open side unengaged, or
     // the penetrating side far outside the tolerance although the bracket
     // is tiny; a continuous gap would change by 1e-9 of its change over the
@@ -580,9 +587,6 @@ ContactStepper::Outcome ContactStepper::locate(SubstepScheme& scheme, State& s, 
     newton_tau = std::numeric_limits<double>::quiet_NaN();
     Vec rate = scheme.end_rate();
     if (rate.size() == sub.q.size()) {
-      int least = -1;
-      for (int id : open)
-        if (least < 0 || set_.gap(id, sub.q) < set_.gap(least, sub.q)) least = id;
       const double slope = least < 0 ? 0.0 : set_.gap_rate(least, sub.q, rate);
       if (slope != 0.0 && std::isfinite(slope)) newton_tau = tau - g / slope;
     }
