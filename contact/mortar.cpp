@@ -34,6 +34,18 @@ T mortar_pair_gap(const T pi[5], int a) {
   return sum * half / p1;
 }
 
+template <class T>
+T mortar_pair_share(const T pi[5]) {
+  const T& p1 = pi[0];
+  const T& p2 = pi[1];
+  const T& p3 = pi[2];
+  if (!(value_of(p3) < value_of(p2)) || !(value_of(p1) > 0.0)) return T(0.0);
+  const T sa = max_of(T(0.0), p3);
+  const T sb = min_of(p1, p2);
+  if (!(value_of(sb) > value_of(sa))) return T(0.0);
+  return (sb - sa) / p1;
+}
+
 unsigned mortar_pair_case(const double pi[5]) {
   // Bits: facing, p1 > 0, p3 > 0 (sa = p3), p2 < p1 (sb = p2), overlap.
   const double sa = std::max(0.0, pi[2]), sb = std::min(pi[0], pi[1]);
@@ -87,10 +99,11 @@ std::vector<int> node_dofs(const std::vector<int>& nodes) {
 }  // namespace
 
 MortarGapTerm::MortarGapTerm(const std::vector<int>& nodes, std::vector<MortarPair> pairs,
-                             double weight, std::string name)
+                             double weight, std::string name, double barrier)
     : Term(node_dofs(nodes), 5 * static_cast<int>(pairs.size()), 5),
       pairs_(std::move(pairs)),
       weight_(weight),
+      barrier_(barrier),
       name_(std::move(name)) {
   if (!(weight_ > 0)) throw std::invalid_argument(name_ + ": mortar weight must be positive");
 }
@@ -204,6 +217,42 @@ PathSmoothness MortarGapTerm::smoothness_between(int, const VecRef& pi0, const V
   const double a[5] = {pi0[0], pi0[1], pi0[2], pi0[3], pi0[4]};
   const double b[5] = {pi1[0], pi1[1], pi1[2], pi1[3], pi1[4]};
   return mortar_pair_case(a) == mortar_pair_case(b) ? PathSmoothness::Smooth : PathSmoothness::Kink;
+}
+
+double MortarGapTerm::block_share(int, const VecRef& pi, Vec* g, Mat* h) const {
+  if (!g && !h) {
+    const double p[5] = {pi[0], pi[1], pi[2], pi[3], pi[4]};
+    return mortar_pair_share(p);
+  }
+  if (h) {
+    Jet<5> p[5];
+    for (int k = 0; k < 5; ++k) p[k] = Jet<5>::variable(pi[k], k);
+    const Jet<5> f = mortar_pair_share(p);
+    if (g) *g = f.g;
+    *h = f.h;
+    return f.v;
+  }
+  Dual<5> p[5];
+  for (int k = 0; k < 5; ++k) p[k] = Dual<5>::variable(pi[k], k);
+  const Dual<5> f = mortar_pair_share(p);
+  *g = f.g;
+  return f.v;
+}
+
+// G(C) = R s(C / c1) below c1, 0 above, s(x) = (1 - x)^3 (1 + 3x + 6x^2):
+// s(0) = 1, s(1) = 0, s' and s'' zero at both ends (C2).
+double MortarGapTerm::coupling(double c, double* d1, double* d2) const {
+  const double c1 = kBarrierCoverage;
+  const double x = c / c1;
+  if (x >= 1.0) {
+    if (d1) *d1 = 0.0;
+    if (d2) *d2 = 0.0;
+    return 0.0;
+  }
+  const double xc = std::max(x, 0.0), u = 1.0 - xc;
+  if (d1) *d1 = x > 0.0 ? -30.0 * xc * xc * u * u * barrier_ / c1 : 0.0;
+  if (d2) *d2 = x > 0.0 ? -60.0 * xc * u * (1.0 - 2.0 * xc) * barrier_ / (c1 * c1) : 0.0;
+  return barrier_ * u * u * u * (1.0 + 3.0 * xc + 6.0 * xc * xc);
 }
 
 double MortarGapTerm::coverage(const Vec& q) const {

@@ -79,7 +79,7 @@ double MortarContact::gap(int i, const Vec& q) const {
   if (!t) return std::numeric_limits<double>::infinity();
   Vec local;
   gather(*t, q, local);
-  if (t->coverage(local) < kMinCoverage) return std::numeric_limits<double>::infinity();
+  if (!(t->coverage(local) > 0.0)) return std::numeric_limits<double>::infinity();
   return t->value(local, 0.0);
 }
 
@@ -147,10 +147,10 @@ void MortarContact::prepare(const Vec& q, const Vec& v, double dt) {
       }
     }
     n_pairs_ += static_cast<long>(pairs.size());
-    terms_[i] = pairs.empty()
-                    ? nullptr
-                    : std::make_unique<MortarGapTerm>(nodes, std::move(pairs), weights_[i],
-                                                      describe(static_cast<int>(i)));
+    terms_[i] = pairs.empty() ? nullptr
+                              : std::make_unique<MortarGapTerm>(
+                                    nodes, std::move(pairs), weights_[i],
+                                    describe(static_cast<int>(i)), kBarrierHeight * weights_[i]);
   }
 }
 

@@ -46,10 +46,9 @@ class MortarContact final : public UnilateralConstraints {
   int size() const override { return static_cast<int>(slave_nodes_.size()); }
   void prepare(const Vec& q, const Vec& v, double dt) override;
   const Term* term(int i) const override { return terms_[static_cast<std::size_t>(i)].get(); }
-  /// Phi_i(q), or +infinity when less than kMinCoverage of the node's slave
-  /// segments lies opposite a master segment.
+  /// Phi_i(q) (with the coverage barrier of mortar.hpp), or +infinity when
+  /// nothing of the node's slave segments lies opposite a master segment.
   double gap(int i, const Vec& q) const override;
-  static constexpr double kMinCoverage = 1e-2;
   std::string describe(int i) const override;
   /// epsilon w_A when the contact is penalized, else 0.
   double penalty(int i) const override;

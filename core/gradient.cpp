@@ -27,16 +27,87 @@ void reduced_gradient(const Term& term, const Vec& pi, double t, Vec& g, Mat* h)
 }
 
 // Exact gradient at q (time t); jac receives its Hessian times `jac_scale`.
+// The coupling G(C) of a coupled term (Term::coupled) at pi: its gradient
+// G'(C) grad C added to g and, with h, its Hessian G' H_C + G'' grad C grad C^T.
+void add_coupling_gradient(const Term& term, const Vec& pi, Vec& g, Mat* h, TermWorkspace& ws) {
+  const int m = term.block_size();
+  double c = 0.0;
+  for (int b = 0; b < term.n_blocks(); ++b)
+    c += term.block_share(b, pi.segment(b * m, m), nullptr, nullptr);
+  double d1 = 0.0, d2 = 0.0;
+  term.coupling(c, &d1, &d2);
+  if (d1 == 0.0 && d2 == 0.0) return;
+  ws.cg.resize(term.n_invariants());
+  for (int b = 0; b < term.n_blocks(); ++b) {
+    term.block_share(b, pi.segment(b * m, m), &ws.g1, h ? &ws.hm : nullptr);
+    ws.cg.segment(b * m, m) = ws.g1;
+    if (h) h->block(b * m, b * m, m, m) += d1 * ws.hm;
+  }
+  g += d1 * ws.cg;
+  if (h) *h += d2 * ws.cg * ws.cg.transpose();
+}
+
 void exact_gradient(const Term& term, const Vec& q, double t, double jac_scale, Vec& grad, Mat* jac,
                     TermWorkspace& ws) {
   term.invariants(q, ws.pim);
   term.invariant_jacobian(q, ws.dpi_mid);
   reduced_gradient(term, ws.pim, t, ws.g, jac ? &ws.h : nullptr);
+  if (term.coupled()) add_coupling_gradient(term, ws.pim, ws.g, jac ? &ws.h : nullptr, ws);
   grad.noalias() = ws.dpi_mid.transpose() * ws.g;
   if (jac) {
     jac->noalias() = ws.dpi_mid.transpose() * ws.h * ws.dpi_mid;
     term.add_invariant_hessians(ws.g, *jac);
     *jac *= jac_scale;
+  }
+}
+
+// The coupling's discrete gradient (Term::coupled), added to ws.g_tilde:
+// G's difference quotient G_d = (G(C_1) - G(C_0)) / (C_1 - C_0) times the
+// sum of the blocks' discrete gradients of c_b,
+//   cbar_b = grad c_b(pi_mid) + (c_b(pi_1) - c_b(pi_0) - grad c_b(pi_mid).dpi_b) / |dpi_b|^2 dpi_b,
+// each formed from its definition (exact across c_b's kinks), so that
+// G_d sum_b cbar_b.dpi_b = G(C_1) - G(C_0) exactly. Nothing where G is zero at
+// both ends. Its Jacobian is the smooth part's, 1/2 (G_d H_c + G'' cbar
+// grad c^T) at pi_mid: Newton converges, if not quadratically, where a
+// coupled term's G changes within the step.
+void add_coupling_discrete(const Term& term, TermWorkspace& ws, bool jac) {
+  const int m = term.block_size();
+  double c0 = 0.0, c1 = 0.0;
+  for (int b = 0; b < term.n_blocks(); ++b) {
+    c0 += term.block_share(b, ws.pi0.segment(b * m, m), nullptr, nullptr);
+    c1 += term.block_share(b, ws.pi1.segment(b * m, m), nullptr, nullptr);
+  }
+  double d1_0 = 0.0, d1_1 = 0.0, d1_m = 0.0, d2_m = 0.0;
+  const double g0 = term.coupling(c0, &d1_0, nullptr);
+  const double g1 = term.coupling(c1, &d1_1, nullptr);
+  term.coupling(0.5 * (c0 + c1), &d1_m, &d2_m);
+  if (g0 == 0.0 && g1 == 0.0 && d1_0 == 0.0 && d1_1 == 0.0 && d1_m == 0.0) return;
+  const double dc = c1 - c0;
+  const double gd = std::abs(dc) > 1e-12 * std::max(1.0, std::abs(c0)) ? (g1 - g0) / dc : d1_m;
+  ws.cg.resize(term.n_invariants());
+  for (int b = 0; b < term.n_blocks(); ++b) {
+    const auto pim = ws.pim.segment(b * m, m);
+    const auto dpi = ws.dpi.segment(b * m, m);
+    term.block_share(b, pim, &ws.g1, jac ? &ws.hm : nullptr);
+    auto cbar = ws.cg.segment(b * m, m);
+    cbar = ws.g1;
+    const double d2 = dpi.squaredNorm();
+    if (d2 > 0.0) {
+      const double s0 = term.block_share(b, ws.pi0.segment(b * m, m), nullptr, nullptr);
+      const double s1 = term.block_share(b, ws.pi1.segment(b * m, m), nullptr, nullptr);
+      cbar += ((s1 - s0 - ws.g1.dot(dpi)) / d2) * dpi;
+    }
+    if (jac) ws.block_jac.block(b * m, b * m, m, m) += 0.5 * gd * ws.hm;
+  }
+  ws.g_tilde += gd * ws.cg;
+  if (jac && d2_m != 0.0) {
+    // grad C at pi_mid, block by block, for the rank-one part.
+    Vec grad_c(term.n_invariants());
+    for (int b = 0; b < term.n_blocks(); ++b) {
+      term.block_share(b, ws.pim.segment(b * m, m), &ws.g1, nullptr);
+      grad_c.segment(b * m, m) = ws.g1;
+    }
+    ws.block_jac += 0.5 * d2_m * ws.cg * grad_c.transpose();
   }
 }
 
@@ -137,6 +208,7 @@ void discrete_gradient(const Term& term, const Vec& q0, const Vec& q1, double t0
       gjac.diagonal().array() += c;
     }
   }
+  if (term.coupled()) add_coupling_discrete(term, ws, jac != nullptr);
   grad.noalias() = ws.dpi_mid.transpose() * ws.g_tilde;
   if (jac) {
     term.invariant_jacobian(q1, ws.dpi_1);

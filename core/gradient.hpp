@@ -49,6 +49,7 @@ struct TermWorkspace {
   Mat dpi_mid, dpi_1, block_jac, h;
   // Per block of the discrete gradient (block_size long).
   Vec g1, gm, pi_q, dc;
+  Vec cg;  // a coupled term's gradient of C, or its discrete gradient (Term::coupled)
   Mat hm, h_plus, h_minus;
 };
 

@@ -14,10 +14,21 @@ Term::Term(std::vector<int> dofs, int n_invariants, int block_size)
 double Term::value(const Vec& q, double t) const {
   Vec pi;
   invariants(q, pi);
-  double f = 0.0;
-  for (int b = 0; b < n_blocks(); ++b)
+  double f = 0.0, c = 0.0;
+  for (int b = 0; b < n_blocks(); ++b) {
     f += block_value(b, pi.segment(b * block_size_, block_size_), t);
+    if (coupled()) c += block_share(b, pi.segment(b * block_size_, block_size_), nullptr, nullptr);
+  }
+  if (coupled()) f += coupling(c, nullptr, nullptr);
   return f;
+}
+
+double Term::block_share(int, const VecRef&, Vec*, Mat*) const {
+  throw std::logic_error(describe() + ": block_share called without coupled()");
+}
+
+double Term::coupling(double, double*, double*) const {
+  throw std::logic_error(describe() + ": coupling called without coupled()");
 }
 
 // --- time derivatives ---------------------------------------------------------

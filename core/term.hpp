@@ -104,6 +104,24 @@ class Term {
   /// True when f depends on time explicitly (driven constraints, loads).
   virtual bool depends_on_time() const { return false; }
 
+  // --- a coupling of the blocks (optional) ----------------------------------
+  // A term whose f does not separate over its blocks alone can add one
+  // function of one more sum over them:
+  //
+  //   f(q) = sum_b f~_b(pi_b) + G(C),   C = sum_b c_b(pi_b)
+  //
+  // (a mortar gap's coverage barrier, contact/mortar.hpp). Its discrete
+  // gradient is G's difference quotient (G(C_1) - G(C_0)) / (C_1 - C_0)
+  // times the sum of the blocks' discrete gradients of c_b, which keeps the
+  // energy identity exactly; it vanishes where G is zero at both ends.
+  /// True when the term has G and c_b (then block_share() and coupling() are
+  /// called).
+  virtual bool coupled() const { return false; }
+  /// c_b(pi); with `g` (block_size() long) its gradient, with `h` its Hessian.
+  virtual double block_share(int block, const VecRef& pi, Vec* g, Mat* h) const;
+  /// G(C), with G'(C) into d1 and G''(C) into d2 where given.
+  virtual double coupling(double c, double* d1, double* d2) const;
+
   // --- explicit time derivatives (driven constraints) -----------------------
   // For a term with depends_on_time(), the partial derivatives of f~_b in t
   // at fixed pi: IDA's velocity constraint G v + Phi_t = 0 and its consistent

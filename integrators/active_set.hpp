@@ -23,11 +23,12 @@
 // sub-steps (lambda ~ 2 m v / tau as tau -> 0; the flat-face blocks lost
 // 3e-4 of their energy in one sub-step of 2e-8). A node entering open (no
 // impact location) is pulled to Phi = 0 at the end of the step. A node that
-// entered at a jump of its engagement (Phi from +infinity to below -tol: a
-// master segment's end moving over its slave segments with the sliver
-// already inside, integrators/contact_step.cpp) keeps the gap it entered
-// with as long as it stays active: energy is conserved, and that gap is
-// reported as the active gap violation it is (docs/hard-cases.md).
+// entered at a jump of its function across zero (integrators/contact_step.cpp)
+// keeps the gap it entered with where pulling it out would cost energy that
+// cannot be taken back, as long as it stays active: energy is conserved, and
+// that gap is reported as the active gap violation it is
+// (docs/hard-cases.md). A mortar node's engagement is no such jump: with the
+// coverage barrier (contact/mortar.hpp) its function starts at +R, open.
 //
 // Events. A contact event is an entry (a node inactive at the start of an
 // accepted (sub-)step and active at its end) or an exit (the reverse).

@@ -386,7 +386,7 @@ StepStats ContactStepper::substep(SubstepScheme& scheme, State& s, double h) {
 }
 
 // The contact functions are prepared anew at each step's start (the
-// search's segment pairs, the engagement threshold), and a function can
+// search's segment pairs), and a function can
 // change there: a node that ended the last step closed or open can start
 // this one inside or apart by more than the gap tolerance, with no bracket to
 // locate anything in. Pulling it to 0 within the sub-step does the work
@@ -557,10 +557,10 @@ ContactStepper::Outcome ContactStepper::locate(SubstepScheme& scheme, State& s, 
       const double g_id = set_.gap(id, sub.q);
       if (g_id < g) g = g_id, least = id;
     }
-    // A jump (an engagement within the bracket: the open side unengaged, or
-    // the penetrating side far outside the tolerance although the bracket
-    // is tiny; a continuous gap would change by 1e-9 of its change over the
-    // step) is taken as collapsed at 1e-9 of the step: its instant to that
+    // A jump (the open side unengaged, or the penetrating side far outside
+    // the tolerance although the bracket is tiny; a continuous gap would
+    // change by 1e-9 of its change over the step) is taken as collapsed at
+    // 1e-9 of the step: its instant to that
     // precision moves the state by less than the gap tolerance, and the
     // bisection down to 1e-14 cost 17 more trials per jump.
     const double width = b.tau - a.tau;
@@ -568,11 +568,11 @@ ContactStepper::Outcome ContactStepper::locate(SubstepScheme& scheme, State& s, 
     const bool collapsed = width <= 1e-14 * h || (jump && width <= 1e-9 * h);
     if (std::abs(g) <= kLocatedGap * tol || collapsed) {
       // On a collapsed bracket the least gap jumps across zero: a node whose
-      // function appeared within it (engaged only now: a master segment's
-      // end moving over its slave segments, +infinity before) with a gap
-      // already below -tol. Its function is continuous (the weighted gap of
-      // the sliver that lies opposite), only its engagement is not. It
-      // enters with that gap, and the next sub-step finds it inside
+      // function appeared within it already below -tol. (A mortar node's
+      // did so, a sliver of a master segment beside the slave's corner, until
+      // the coverage barrier made its engagement start at +R:
+      // contact/mortar.hpp.) It enters with that gap, and the next sub-step
+      // finds it inside
       // (settle_changed_functions): pulled to 0 where the work of the pull
       // can be taken back by a velocity update, else (the work of a sliver's
       // multiplier was up to 85 times the energy, tests/test_impact_sweep.cpp)

@@ -213,6 +213,118 @@ TEST(MortarGapTerm, CurrentWeightIsOverTheCurrentMortarSegments) {
   EXPECT_NEAR(term->current_weight(partial).length, 0.42 + 0.5, 1e-14);
 }
 
+// The coverage barrier (contact/mortar.hpp). Slave nodes 0, 1, 2 at x = 0, 1,
+// 2 on y = 0 (body above); one master segment, running right to left, at
+// height `depth` (inside the slave body where positive) whose right end is at
+// x = xi: the first overlap of node 1's segment (0, 1) is [0, xi], coverage
+// xi. Local nodes 0..2 slave, 3 and 4 the master's ends.
+std::unique_ptr<MortarGapTerm> sliver_term(double barrier) {
+  std::vector<MortarPair> pairs = {{{0, 1, 3, 4}, 1}, {{1, 2, 3, 4}, 0}};
+  return std::make_unique<MortarGapTerm>(std::vector<int>{0, 1, 2, 3, 4}, pairs, 1.0, "sliver",
+                                         barrier);
+}
+
+Vec sliver_config(double xi, double depth, double tilt = 0.0) {
+  Vec q(10);
+  q << 0, 0, 1, 0, 2, 0, xi, depth, xi - 1.0, depth + tilt;
+  return q;
+}
+
+// Engaged from the first overlap, the node's function starts at +R and runs
+// continuously down to the weighted gap, which it equals from c1 on; without
+// the barrier it would start at the sliver's own gap (here -depth xi^2 / 2,
+// which the 1 % engagement made a jump from +infinity to -2.5e-6).
+TEST(MortarGapTerm, CoverageBarrierIsContinuousFromTheFirstOverlap) {
+  const double r = kBarrierHeight, depth = 0.05;
+  auto barrier = sliver_term(r), plain = sliver_term(0.0);
+  EXPECT_TRUE(barrier->coupled());
+  EXPECT_FALSE(plain->coupled());
+  const int n = 4000;
+  const double step = 2.0 * kBarrierCoverage / n;
+  double last = barrier->value(sliver_config(1e-12, depth), 0.0), max_jump = 0.0;
+  EXPECT_NEAR(last, r, 1e-12);
+  int crossings = 0;
+  for (int i = 1; i <= n; ++i) {
+    const double xi = i * step;
+    const Vec q = sliver_config(xi, depth);
+    const double f = barrier->value(q, 0.0), w = plain->value(q, 0.0);
+    EXPECT_NEAR(w, -depth * xi * xi / 2.0, 1e-15);
+    EXPECT_NEAR(barrier->coverage(q), xi, 1e-15);
+    if (xi >= kBarrierCoverage)
+      EXPECT_EQ(f, w) << xi;
+    else
+      EXPECT_GT(f, w) << xi;
+    EXPECT_LE(f, last + 1e-15) << xi;  // the barrier only falls as the coverage grows
+    max_jump = std::max(max_jump, last - f);
+    crossings += (last > 0.0) != (f > 0.0);
+    last = f;
+  }
+  // |G'| <= 1.875 R / c1, and the gap's own slope is depth xi <= 2 depth c1:
+  // no step moves the function by more than their sum times the step.
+  EXPECT_LE(max_jump, (1.875 * r / kBarrierCoverage + 2.0 * depth * kBarrierCoverage) * step);
+  EXPECT_EQ(crossings, 1);  // it closes once, where it can be located
+}
+
+// The barrier's gradient (the exact one and its Jacobian) against central
+// differences of the function, where the barrier acts and where it does not.
+TEST(MortarGapTerm, CoverageBarrierGradientAndJacobianAreTheFunctionsDerivatives) {
+  auto term = sliver_term(kBarrierHeight);
+  TermWorkspace ws;
+  for (double xi : {0.2 * kBarrierCoverage, 0.5 * kBarrierCoverage, 0.9 * kBarrierCoverage,
+                    3.0 * kBarrierCoverage}) {
+    const Vec q = sliver_config(xi, 0.05, 0.3);
+    Vec g, gp, gm;
+    Mat jac, none;
+    term_gradient(*term, GradientKind::Exact, q, q, 0, 0, g, &jac, ws);
+    const double h = 1e-7 * kBarrierCoverage;
+    double scale = g.cwiseAbs().maxCoeff();
+    for (Eigen::Index j = 0; j < q.size(); ++j) {
+      Vec qp = q, qm = q;
+      qp[j] += h, qm[j] -= h;
+      const double fd = (term->value(qp, 0) - term->value(qm, 0)) / (2 * h);
+      EXPECT_NEAR(g[j], fd, 1e-6 * scale) << xi << " " << j;
+      term_gradient(*term, GradientKind::Exact, qp, qp, 0, 0, gp, nullptr, ws);
+      term_gradient(*term, GradientKind::Exact, qm, qm, 0, 0, gm, nullptr, ws);
+      EXPECT_LE(((gp - gm) / (2 * h) - jac.col(j)).cwiseAbs().maxCoeff(),
+                1e-5 * jac.cwiseAbs().maxCoeff() + 1e-9)
+          << xi << " " << j;
+    }
+  }
+}
+
+// The discrete gradient of a function with the barrier keeps the energy
+// identity exactly, across c1 and within the barrier, and like the gap's it
+// neither pushes nor turns the pair as a whole (zero resultant and moment
+// about the origin at q_mid): the momenta are kept.
+TEST(MortarGapTerm, CoverageBarrierDiscreteGradientKeepsEnergyAndMomenta) {
+  auto term = sliver_term(kBarrierHeight);
+  TermWorkspace ws;
+  std::mt19937 rng(17);
+  std::uniform_real_distribution<double> xi(-0.2 * kBarrierCoverage, 2.0 * kBarrierCoverage),
+      depth(-0.02, 0.08), tilt(-0.5, 0.5), noise(-1e-3, 1e-3);
+  int in_barrier = 0;
+  for (int trial = 0; trial < 400; ++trial) {
+    const double t = tilt(rng);
+    Vec q0 = sliver_config(xi(rng), depth(rng), t), q1 = sliver_config(xi(rng), depth(rng), t);
+    if (trial % 2) q1 = q0 + Vec::NullaryExpr(q0.size(), [&] { return noise(rng) * 1e-3; });
+    Vec g;
+    term_gradient(*term, GradientKind::Discrete, q0, q1, 0, 0, g, nullptr, ws);
+    const double f0 = term->value(q0, 0), f1 = term->value(q1, 0);
+    EXPECT_NEAR(g.dot(q1 - q0), f1 - f0, 1e-15 + 1e-13 * std::abs(f1 - f0)) << trial;
+    const Vec mid = 0.5 * (q0 + q1);
+    Eigen::Vector2d resultant = Eigen::Vector2d::Zero();
+    double moment = 0.0;
+    for (int n = 0; n < 5; ++n) {
+      resultant += g.segment<2>(2 * n);
+      moment += mid[2 * n] * g[2 * n + 1] - mid[2 * n + 1] * g[2 * n];
+    }
+    EXPECT_LE(resultant.norm(), 1e-12 * g.norm()) << trial;
+    EXPECT_LE(std::abs(moment), 1e-12 * g.norm()) << trial;
+    in_barrier += term->coverage(q0) < kBarrierCoverage || term->coverage(q1) < kBarrierCoverage;
+  }
+  EXPECT_GE(in_barrier, 200);
+}
+
 // A run of the scene through the library; its summary holds the figures.
 Summary run_impact(const RingImpact& scene, const char* scheme, double dt, double t_end,
                    bool locate) {
