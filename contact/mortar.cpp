@@ -8,6 +8,31 @@
 
 namespace emdae {
 
+namespace {
+
+// The facing fade (mortar.hpp): with c2 = cos^2 of the angle between the
+// pair's slave segment and its master segment turned back,
+// (pi3 - pi2)^2 / ((pi3 - pi2)^2 + (pi5 - pi4)^2), 1 from kFacingFull on, 0
+// up to kFacingNone, and between them the C2 smootherstep
+// u^3 (10 - 15 u + 6 u^2) in u = (c2 - kFacingNone) / (kFacingFull - kFacingNone).
+constexpr double kFacingNone = 0.05;  // cos^2 of 77.1 degrees
+constexpr double kFacingFull = 0.5;   // cos^2 of 45 degrees
+
+template <class T>
+T facing_fade(const T pi[5]) {
+  const T d = pi[2] - pi[1];
+  const T e = pi[4] - pi[3];
+  const T d2 = d * d;
+  const T c2 = d2 / (d2 + e * e);
+  const double v = value_of(c2);
+  if (v >= kFacingFull) return T(1.0);
+  if (v <= kFacingNone) return T(0.0);
+  const T u = (1.0 / (kFacingFull - kFacingNone)) * (c2 + (-kFacingNone));
+  return (u * u) * u * (6.0 * (u * u) + (10.0 - 15.0 * u));
+}
+
+}  // namespace
+
 template <class T>
 T mortar_pair_gap(const T pi[5], int a) {
   const T& p1 = pi[0];
@@ -31,7 +56,7 @@ T mortar_pair_gap(const T pi[5], int a) {
     const T n = a == 0 ? 1.0 - s / p1 : s / p1;
     sum = sum + n * gap_times_len;
   }
-  return sum * half / p1;
+  return facing_fade(pi) * (sum * half / p1);
 }
 
 template <class T>
@@ -43,7 +68,7 @@ T mortar_pair_share(const T pi[5]) {
   const T sa = max_of(T(0.0), p3);
   const T sb = min_of(p1, p2);
   if (!(value_of(sb) > value_of(sa))) return T(0.0);
-  return (sb - sa) / p1;
+  return facing_fade(pi) * ((sb - sa) / p1);
 }
 
 unsigned mortar_pair_case(const double pi[5]) {
@@ -259,13 +284,8 @@ double MortarGapTerm::coverage(const Vec& q) const {
   Vec pi;
   invariants(q, pi);
   double c = 0.0;
-  for (std::size_t b = 0; b < pairs_.size(); ++b) {
-    const double p1 = pi[static_cast<Eigen::Index>(5 * b)],
-                 p2 = pi[static_cast<Eigen::Index>(5 * b) + 1],
-                 p3 = pi[static_cast<Eigen::Index>(5 * b) + 2];
-    if (!(p3 < p2) || !(p1 > 0)) continue;
-    c += std::max(0.0, std::min(p1, p2) - std::max(0.0, p3)) / p1;
-  }
+  for (std::size_t b = 0; b < pairs_.size(); ++b)
+    c += mortar_pair_share(pi.data() + static_cast<Eigen::Index>(5 * b));
   // A node has two slave segments (one at a surface's end): full coverage 2.
   return c;
 }
@@ -284,7 +304,8 @@ MortarGapTerm::CurrentWeight MortarGapTerm::current_weight(const Vec& q) const {
     // s = a.(x - x1s) runs over [0, |a|^2]: the arc length is s / |a|, and
     // int N_2 ds = (sb^2 - sa^2) / (2 pi1), N_1 = 1 - N_2.
     const double n2 = (sb * sb - sa * sa) / (2.0 * p1);
-    const double length = (pairs_[b].slave_node == 0 ? (sb - sa) - n2 : n2) / std::sqrt(p1);
+    const double length = facing_fade(pi.data() + static_cast<Eigen::Index>(5 * b)) *
+                          (pairs_[b].slave_node == 0 ? (sb - sa) - n2 : n2) / std::sqrt(p1);
     // a = x2s - x1s; the outward normal is a turned clockwise, (a_y, -a_x) / |a|.
     const auto& n = pairs_[b].local_nodes;
     const double ax = q[dof(n[1], 0)] - q[dof(n[0], 0)], ay = q[dof(n[1], 1)] - q[dof(n[0], 1)];

@@ -53,6 +53,19 @@
 // master's end with the slave's neighbouring face that the sliver stands
 // for. G is a function of the invariants pi1..pi3 of each pair, so the
 // momenta are kept; the discrete gradient takes it through Term::coupled().
+//
+// The facing fade. A pair counts only as far as its segments face each
+// other: its gap contribution and its share of the coverage are multiplied
+// by a C2 weight of c2 = cos^2 of the angle between the slave segment and
+// the master segment turned back, (pi3 - pi2)^2 / ((pi3 - pi2)^2 +
+// (pi5 - pi4)^2): 1 within 45 degrees of facing (c2 >= 0.5), 0 beyond 77.1
+// (c2 <= 0.05), a smootherstep in c2 between (mortar.cpp). A master segment
+// turned away from the slave segment, beside its corner or on a side of the
+// other body, projects onto it as a sliver or from far off; summed into the
+// gap whole, such a pair made the function jump when the search's pairs
+// changed at a step's start (docs/hard-cases.md, kind B). Faded, it enters
+// and leaves the sum continuously. Real contact pairs face each other
+// within a few degrees and are unchanged.
 #pragma once
 
 #include <array>

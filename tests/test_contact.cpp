@@ -325,6 +325,98 @@ TEST(MortarGapTerm, CoverageBarrierDiscreteGradientKeepsEnergyAndMomenta) {
   EXPECT_GE(in_barrier, 200);
 }
 
+// The facing fade (contact/mortar.hpp): the master segment of sliver_config
+// turned by theta = atan(tilt) from anti-parallel, its projection on the
+// slave line (and so the node's coverage, 0.5 here) unchanged. The pair
+// counts whole up to 45 degrees (cos^2 0.5: tilt 1), not at all from 77.1
+// (cos^2 0.05: tilt sqrt(19)), and in between its gap and its share fall
+// continuously: a master segment beside the slave's corner, turned away
+// from the slave, is no contact.
+TEST(MortarGapTerm, FacingFadeWeighsAPairByTheAngleOfItsSegments) {
+  auto term = sliver_term(0.0);
+  const double xi = 0.5, depth = 0.05;
+  // Whole: the gap of the master line over [0, xi], weighted by N_1 = s.
+  for (double tilt : {0.0, 0.5, 1.0}) {
+    const Vec q = sliver_config(xi, depth, tilt);
+    // x_master(s) = depth + tilt (xi - s) along the slave's x: -gap.
+    const double whole =
+        -(depth * xi * xi / 2.0 + tilt * (xi * xi * xi / 2.0 - xi * xi * xi / 3.0));
+    EXPECT_NEAR(term->value(q, 0.0), whole, 1e-15) << tilt;
+    EXPECT_NEAR(term->coverage(q), xi, 1e-15) << tilt;
+  }
+  for (double tilt : {std::sqrt(19.0) + 1e-9, 6.0, 50.0}) {
+    const Vec q = sliver_config(xi, depth, tilt);
+    EXPECT_EQ(term->value(q, 0.0), 0.0) << tilt;
+    EXPECT_EQ(term->coverage(q), 0.0) << tilt;
+  }
+  // Between: the share falls monotonically and continuously from xi to 0.
+  const int n = 4000;
+  double last_share = xi, last_value = term->value(sliver_config(xi, depth, 1.0), 0.0);
+  double max_jump = 0.0;
+  for (int i = 1; i <= n; ++i) {
+    const double tilt = 1.0 + (std::sqrt(19.0) - 1.0) * i / n;
+    const Vec q = sliver_config(xi, depth, tilt);
+    const double share = term->coverage(q), value = term->value(q, 0.0);
+    EXPECT_LE(share, last_share + 1e-15) << tilt;
+    max_jump = std::max({max_jump, std::abs(share - last_share), std::abs(value - last_value)});
+    last_share = share, last_value = value;
+  }
+  EXPECT_LT(max_jump,
+            5e-3);  // |d share / d tilt| <= 1.875 xi / (tilt range) over n steps: 2e-4 ... 1e-3
+  EXPECT_NEAR(last_share, 0.0, 1e-12);
+}
+
+// Where a pair fades, the gap's exact gradient and its Jacobian are its
+// derivatives, and its discrete gradient keeps the energy identity and the
+// momenta (zero resultant and moment), as everywhere else.
+TEST(MortarGapTerm, FacingFadeKeepsTheGradientsIdentities) {
+  auto term = sliver_term(kBarrierHeight);
+  TermWorkspace ws;
+  std::mt19937 rng(23);
+  std::uniform_real_distribution<double> tilt(0.8, 4.6), xi(0.2, 0.8), depth(-0.02, 0.08);
+  int faded = 0;
+  for (int trial = 0; trial < 200; ++trial) {
+    const Vec q0 = sliver_config(xi(rng), depth(rng), tilt(rng));
+    const Vec q1 = trial % 2 ? sliver_config(xi(rng), depth(rng), tilt(rng))
+                             : Vec(q0 + 1e-4 * Vec::Random(q0.size()));
+    Vec g;
+    term_gradient(*term, GradientKind::Discrete, q0, q1, 0, 0, g, nullptr, ws);
+    const double f0 = term->value(q0, 0), f1 = term->value(q1, 0);
+    EXPECT_NEAR(g.dot(q1 - q0), f1 - f0, 1e-16 + 1e-13 * std::abs(f1 - f0)) << trial;
+    const Vec mid = 0.5 * (q0 + q1);
+    Eigen::Vector2d resultant = Eigen::Vector2d::Zero();
+    double moment = 0.0;
+    for (int k = 0; k < 5; ++k) {
+      resultant += g.segment<2>(2 * k);
+      moment += mid[2 * k] * g[2 * k + 1] - mid[2 * k + 1] * g[2 * k];
+    }
+    EXPECT_LE(resultant.norm(), 1e-12 * g.norm() + 1e-300) << trial;
+    EXPECT_LE(std::abs(moment), 1e-12 * g.norm() + 1e-300) << trial;
+    // Exact gradient and Jacobian against central differences.
+    Vec ge, gp, gm;
+    Mat jac;
+    term_gradient(*term, GradientKind::Exact, q0, q0, 0, 0, ge, &jac, ws);
+    // Where the fade is steep the third derivatives are large (1e4): central
+    // differences are accurate to about 1e-12 at h = 1e-6, and their
+    // round-off is about 2e-11.
+    const double h = 1e-6, scale = ge.cwiseAbs().maxCoeff();
+    for (Eigen::Index j = 0; j < q0.size(); ++j) {
+      Vec qp = q0, qm = q0;
+      qp[j] += h, qm[j] -= h;
+      EXPECT_NEAR(ge[j], (term->value(qp, 0) - term->value(qm, 0)) / (2 * h), 1e-6 * scale + 5e-11)
+          << trial << " " << j;
+      term_gradient(*term, GradientKind::Exact, qp, qp, 0, 0, gp, nullptr, ws);
+      term_gradient(*term, GradientKind::Exact, qm, qm, 0, 0, gm, nullptr, ws);
+      EXPECT_LE(((gp - gm) / (2 * h) - jac.col(j)).cwiseAbs().maxCoeff(),
+                1e-5 * jac.cwiseAbs().maxCoeff() + 1e-9)
+          << trial << " " << j;
+    }
+    const double t0 = q0[9] - q0[7];  // the master's tilt
+    faded += t0 > 1.0 && t0 < std::sqrt(19.0);
+  }
+  EXPECT_GE(faded, 120);  // most trials start where the pair fades
+}
+
 // A run of the scene through the library; its summary holds the figures.
 Summary run_impact(const RingImpact& scene, const char* scheme, double dt, double t_end,
                    bool locate) {
