@@ -33,6 +33,17 @@ T facing_fade(const T pi[5]) {
 
 }  // namespace
 
+// The mortar segment [sa, sb] of a pair on its slave segment's s in [0, pi1],
+// where the master segment faces the slave (runs against it: pi3 < pi2) and
+// overlaps it; false where there is none.
+template <class T>
+bool mortar_segment(const T pi[5], T& sa, T& sb) {
+  if (!(value_of(pi[2]) < value_of(pi[1])) || !(value_of(pi[0]) > 0.0)) return false;
+  sa = max_of(T(0.0), pi[2]);
+  sb = min_of(pi[0], pi[1]);
+  return value_of(sb) > value_of(sa);
+}
+
 template <class T>
 T mortar_pair_gap(const T pi[5], int a) {
   const T& p1 = pi[0];
@@ -40,11 +51,8 @@ T mortar_pair_gap(const T pi[5], int a) {
   const T& p3 = pi[2];
   const T& p4 = pi[3];
   const T& p5 = pi[4];
-  // A master segment facing the slave runs against it: pi3 < pi2.
-  if (!(value_of(p3) < value_of(p2)) || !(value_of(p1) > 0.0)) return T(0.0);
-  const T sa = max_of(T(0.0), p3);
-  const T sb = min_of(p1, p2);
-  if (!(value_of(sb) > value_of(sa))) return T(0.0);
+  T sa, sb;
+  if (!mortar_segment(pi, sa, sb)) return T(0.0);
   const T slope = (p5 - p4) / (p3 - p2);
   const T half = 0.5 * (sb - sa);
   const T mid = 0.5 * (sa + sb);
@@ -61,14 +69,9 @@ T mortar_pair_gap(const T pi[5], int a) {
 
 template <class T>
 T mortar_pair_share(const T pi[5]) {
-  const T& p1 = pi[0];
-  const T& p2 = pi[1];
-  const T& p3 = pi[2];
-  if (!(value_of(p3) < value_of(p2)) || !(value_of(p1) > 0.0)) return T(0.0);
-  const T sa = max_of(T(0.0), p3);
-  const T sb = min_of(p1, p2);
-  if (!(value_of(sb) > value_of(sa))) return T(0.0);
-  return facing_fade(pi) * ((sb - sa) / p1);
+  T sa, sb;
+  if (!mortar_segment(pi, sa, sb)) return T(0.0);
+  return facing_fade(pi) * ((sb - sa) / pi[0]);
 }
 
 unsigned mortar_pair_case(const double pi[5]) {
@@ -295,17 +298,15 @@ MortarGapTerm::CurrentWeight MortarGapTerm::current_weight(const Vec& q) const {
   invariants(q, pi);
   CurrentWeight w;
   for (std::size_t b = 0; b < pairs_.size(); ++b) {
-    const double p1 = pi[static_cast<Eigen::Index>(5 * b)],
-                 p2 = pi[static_cast<Eigen::Index>(5 * b) + 1],
-                 p3 = pi[static_cast<Eigen::Index>(5 * b) + 2];
-    if (!(p3 < p2) || !(p1 > 0)) continue;
-    const double sa = std::max(0.0, p3), sb = std::min(p1, p2);
-    if (!(sb > sa)) continue;
+    const double* pb = pi.data() + static_cast<Eigen::Index>(5 * b);
+    const double p1 = pb[0];
+    double sa = 0.0, sb = 0.0;
+    if (!mortar_segment(pb, sa, sb)) continue;
     // s = a.(x - x1s) runs over [0, |a|^2]: the arc length is s / |a|, and
     // int N_2 ds = (sb^2 - sa^2) / (2 pi1), N_1 = 1 - N_2.
     const double n2 = (sb * sb - sa * sa) / (2.0 * p1);
-    const double length = facing_fade(pi.data() + static_cast<Eigen::Index>(5 * b)) *
-                          (pairs_[b].slave_node == 0 ? (sb - sa) - n2 : n2) / std::sqrt(p1);
+    const double length =
+        facing_fade(pb) * (pairs_[b].slave_node == 0 ? (sb - sa) - n2 : n2) / std::sqrt(p1);
     // a = x2s - x1s; the outward normal is a turned clockwise, (a_y, -a_x) / |a|.
     const auto& n = pairs_[b].local_nodes;
     const double ax = q[dof(n[1], 0)] - q[dof(n[0], 0)], ay = q[dof(n[1], 1)] - q[dof(n[0], 1)];
