@@ -75,10 +75,15 @@ T mortar_pair_share(const T pi[5]) {
 }
 
 unsigned mortar_pair_case(const double pi[5]) {
-  // Bits: facing, p1 > 0, p3 > 0 (sa = p3), p2 < p1 (sb = p2), overlap.
+  // Bits: facing, p1 > 0, p3 > 0 (sa = p3), p2 < p1 (sb = p2), overlap, and
+  // the facing fade's piece (whole, fading, none): its joins are only C2,
+  // and a step across one is formed from the direct quotient too.
   const double sa = std::max(0.0, pi[2]), sb = std::min(pi[0], pi[1]);
+  const double d = pi[2] - pi[1], e = pi[4] - pi[3];
+  const double c2 = d * d / (d * d + e * e);
   return (pi[2] < pi[1] ? 1u : 0u) | (pi[0] > 0.0 ? 2u : 0u) | (pi[2] > 0.0 ? 4u : 0u) |
-         (pi[1] < pi[0] ? 8u : 0u) | (sb > sa ? 16u : 0u);
+         (pi[1] < pi[0] ? 8u : 0u) | (sb > sa ? 16u : 0u) | (c2 >= kFacingFull ? 32u : 0u) |
+         (c2 > kFacingNone ? 64u : 0u);
 }
 
 template double mortar_pair_gap<double>(const double pi[5], int a);
