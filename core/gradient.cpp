@@ -26,7 +26,6 @@ void reduced_gradient(const Term& term, const Vec& pi, double t, Vec& g, Mat* h)
   }
 }
 
-// Exact gradient at q (time t); jac receives its Hessian times `jac_scale`.
 // The coupling G(C) of a coupled term (Term::coupled) at pi: its gradient
 // G'(C) grad C added to g and, with h, its Hessian G' H_C + G'' grad C grad C^T.
 void add_coupling_gradient(const Term& term, const Vec& pi, Vec& g, Mat* h, TermWorkspace& ws) {
@@ -47,6 +46,7 @@ void add_coupling_gradient(const Term& term, const Vec& pi, Vec& g, Mat* h, Term
   if (h) *h += d2 * ws.cg * ws.cg.transpose();
 }
 
+// Exact gradient at q (time t); jac receives its Hessian times `jac_scale`.
 void exact_gradient(const Term& term, const Vec& q, double t, double jac_scale, Vec& grad, Mat* jac,
                     TermWorkspace& ws) {
   term.invariants(q, ws.pim);
