@@ -18,12 +18,18 @@ namespace {
 constexpr double kFacingNone = 0.05;  // cos^2 of 77.1 degrees
 constexpr double kFacingFull = 0.5;   // cos^2 of 45 degrees
 
+// cos^2 of the angle between the pair's segments (one turned back).
 template <class T>
-T facing_fade(const T pi[5]) {
+T facing_cos2(const T pi[5]) {
   const T d = pi[2] - pi[1];
   const T e = pi[4] - pi[3];
   const T d2 = d * d;
-  const T c2 = d2 / (d2 + e * e);
+  return d2 / (d2 + e * e);
+}
+
+template <class T>
+T facing_fade(const T pi[5]) {
+  const T c2 = facing_cos2(pi);
   const double v = value_of(c2);
   if (v >= kFacingFull) return T(1.0);
   if (v <= kFacingNone) return T(0.0);
@@ -79,8 +85,7 @@ unsigned mortar_pair_case(const double pi[5]) {
   // the facing fade's piece (whole, fading, none): its joins are only C2,
   // and a step across one is formed from the direct quotient too.
   const double sa = std::max(0.0, pi[2]), sb = std::min(pi[0], pi[1]);
-  const double d = pi[2] - pi[1], e = pi[4] - pi[3];
-  const double c2 = d * d / (d * d + e * e);
+  const double c2 = facing_cos2(pi);
   return (pi[2] < pi[1] ? 1u : 0u) | (pi[0] > 0.0 ? 2u : 0u) | (pi[2] > 0.0 ? 4u : 0u) |
          (pi[1] < pi[0] ? 8u : 0u) | (sb > sa ? 16u : 0u) | (c2 >= kFacingFull ? 32u : 0u) |
          (c2 > kFacingNone ? 64u : 0u);

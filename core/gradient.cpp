@@ -72,43 +72,38 @@ void exact_gradient(const Term& term, const Vec& q, double t, double jac_scale, 
 // coupled term's G changes within the step.
 void add_coupling_discrete(const Term& term, TermWorkspace& ws, bool jac) {
   const int m = term.block_size();
-  double c0 = 0.0, c1 = 0.0;
-  for (int b = 0; b < term.n_blocks(); ++b) {
-    c0 += term.block_share(b, ws.pi0.segment(b * m, m), nullptr, nullptr);
-    c1 += term.block_share(b, ws.pi1.segment(b * m, m), nullptr, nullptr);
+  const int nb = term.n_blocks();
+  ws.share0.resize(nb);
+  ws.share1.resize(nb);
+  for (int b = 0; b < nb; ++b) {
+    ws.share0[b] = term.block_share(b, ws.pi0.segment(b * m, m), nullptr, nullptr);
+    ws.share1[b] = term.block_share(b, ws.pi1.segment(b * m, m), nullptr, nullptr);
   }
-  double d1_0 = 0.0, d1_1 = 0.0, d1_m = 0.0, d2_m = 0.0;
-  const double g0 = term.coupling(c0, &d1_0, nullptr);
-  const double g1 = term.coupling(c1, &d1_1, nullptr);
+  const double c0 = ws.share0.sum(), c1 = ws.share1.sum();
+  const double g0 = term.coupling(c0, nullptr, nullptr);
+  const double g1 = term.coupling(c1, nullptr, nullptr);
+  // G is zero only from its threshold on; zero at both ends, it is zero
+  // along the whole step (C at the midpoint is between).
+  if (g0 == 0.0 && g1 == 0.0) return;
+  double d1_m = 0.0, d2_m = 0.0;
   term.coupling(0.5 * (c0 + c1), &d1_m, &d2_m);
-  if (g0 == 0.0 && g1 == 0.0 && d1_0 == 0.0 && d1_1 == 0.0 && d1_m == 0.0) return;
   const double dc = c1 - c0;
   const double gd = std::abs(dc) > 1e-12 * std::max(1.0, std::abs(c0)) ? (g1 - g0) / dc : d1_m;
   ws.cg.resize(term.n_invariants());
-  for (int b = 0; b < term.n_blocks(); ++b) {
-    const auto pim = ws.pim.segment(b * m, m);
+  ws.cg_mid.resize(term.n_invariants());
+  for (int b = 0; b < nb; ++b) {
     const auto dpi = ws.dpi.segment(b * m, m);
-    term.block_share(b, pim, &ws.g1, jac ? &ws.hm : nullptr);
+    term.block_share(b, ws.pim.segment(b * m, m), &ws.g1, jac ? &ws.hm : nullptr);
+    ws.cg_mid.segment(b * m, m) = ws.g1;
     auto cbar = ws.cg.segment(b * m, m);
     cbar = ws.g1;
     const double d2 = dpi.squaredNorm();
-    if (d2 > 0.0) {
-      const double s0 = term.block_share(b, ws.pi0.segment(b * m, m), nullptr, nullptr);
-      const double s1 = term.block_share(b, ws.pi1.segment(b * m, m), nullptr, nullptr);
-      cbar += ((s1 - s0 - ws.g1.dot(dpi)) / d2) * dpi;
-    }
+    if (d2 > 0.0) cbar += ((ws.share1[b] - ws.share0[b] - ws.g1.dot(dpi)) / d2) * dpi;
     if (jac) ws.block_jac.block(b * m, b * m, m, m) += 0.5 * gd * ws.hm;
   }
   ws.g_tilde += gd * ws.cg;
-  if (jac && d2_m != 0.0) {
-    // grad C at pi_mid, block by block, for the rank-one part.
-    Vec grad_c(term.n_invariants());
-    for (int b = 0; b < term.n_blocks(); ++b) {
-      term.block_share(b, ws.pim.segment(b * m, m), &ws.g1, nullptr);
-      grad_c.segment(b * m, m) = ws.g1;
-    }
-    ws.block_jac += 0.5 * d2_m * ws.cg * grad_c.transpose();
-  }
+  // The rank-one part: G'' cbar grad c(pi_mid)^T.
+  if (jac && d2_m != 0.0) ws.block_jac += 0.5 * d2_m * ws.cg * ws.cg_mid.transpose();
 }
 
 void discrete_gradient(const Term& term, const Vec& q0, const Vec& q1, double t0, double t1,

@@ -49,7 +49,9 @@ struct TermWorkspace {
   Mat dpi_mid, dpi_1, block_jac, h;
   // Per block of the discrete gradient (block_size long).
   Vec g1, gm, pi_q, dc;
-  Vec cg;  // a coupled term's gradient of C, or its discrete gradient (Term::coupled)
+  // A coupled term's (Term::coupled): the gradient of C or its discrete
+  // gradient, grad C at pi_mid, and the blocks' shares at both ends.
+  Vec cg, cg_mid, share0, share1;
   Mat hm, h_plus, h_minus;
 };
 

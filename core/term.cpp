@@ -14,12 +14,14 @@ Term::Term(std::vector<int> dofs, int n_invariants, int block_size)
 double Term::value(const Vec& q, double t) const {
   Vec pi;
   invariants(q, pi);
+  const bool with_coupling = coupled();
   double f = 0.0, c = 0.0;
   for (int b = 0; b < n_blocks(); ++b) {
-    f += block_value(b, pi.segment(b * block_size_, block_size_), t);
-    if (coupled()) c += block_share(b, pi.segment(b * block_size_, block_size_), nullptr, nullptr);
+    const auto pb = pi.segment(b * block_size_, block_size_);
+    f += block_value(b, pb, t);
+    if (with_coupling) c += block_share(b, pb, nullptr, nullptr);
   }
-  if (coupled()) f += coupling(c, nullptr, nullptr);
+  if (with_coupling) f += coupling(c, nullptr, nullptr);
   return f;
 }
 

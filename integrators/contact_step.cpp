@@ -560,9 +560,9 @@ ContactStepper::Outcome ContactStepper::locate(SubstepScheme& scheme, State& s, 
     // A jump (the open side unengaged, or the penetrating side far outside
     // the tolerance although the bracket is tiny; a continuous gap would
     // change by 1e-9 of its change over the step) is taken as collapsed at
-    // 1e-9 of the step: its instant to that
-    // precision moves the state by less than the gap tolerance, and the
-    // bisection down to 1e-14 cost 17 more trials per jump.
+    // 1e-9 of the step: its instant to that precision moves the state by
+    // less than the gap tolerance, and the bisection down to 1e-14 cost 17
+    // more trials per jump.
     const double width = b.tau - a.tau;
     const bool jump = !std::isfinite(fa) || fb < -100.0 * tol;
     const bool collapsed = width <= 1e-14 * h || (jump && width <= 1e-9 * h);
@@ -572,11 +572,10 @@ ContactStepper::Outcome ContactStepper::locate(SubstepScheme& scheme, State& s, 
       // did so, a sliver of a master segment beside the slave's corner, until
       // the coverage barrier made its engagement start at +R:
       // contact/mortar.hpp.) It enters with that gap, and the next sub-step
-      // finds it inside
-      // (settle_changed_functions): pulled to 0 where the work of the pull
-      // can be taken back by a velocity update, else (the work of a sliver's
-      // multiplier was up to 85 times the energy, tests/test_impact_sweep.cpp)
-      // it keeps that gap while it stays active.
+      // finds it inside (settle_changed_functions): pulled to 0 where the
+      // work of the pull can be taken back by a velocity update, else (the
+      // work of a sliver's multiplier was up to 85 times the energy,
+      // tests/test_impact_sweep.cpp) it keeps that gap while it stays active.
       for (int id : open)
         if (set_.gap(id, sub.q) <= tol) activate_candidate(sub, id);
       s = std::move(sub);
