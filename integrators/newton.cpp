@@ -226,14 +226,22 @@ NewtonResult NewtonSolver::solve(NewtonProblem& problem, Vec& x, const Vec& resi
   KINGetNumNonlinSolvIters(m.kin.get(), &iters);
 
   // Converged on the tolerance: go on, one iteration at a time, while the
-  // residual still leaves more energy in the step than energy_tolerance and
-  // Newton can still make progress (a step above round-off).
-  if ((flag == KIN_SUCCESS || flag == KIN_INITIAL_GUESS_OK) && settings_.energy_tolerance > 0) {
+  // residual still leaves more energy (or angular momentum) in the step than
+  // energy_tolerance (angular_tolerance) and Newton can still make progress
+  // (a step above round-off).
+  const auto balanced = [&](const Vec& xu) {
+    return (settings_.energy_tolerance <= 0 ||
+            problem.energy_residual(xu, m.f) <= settings_.energy_tolerance) &&
+           (settings_.angular_tolerance <= 0 ||
+            problem.angular_residual(xu, m.f) <= settings_.angular_tolerance);
+  };
+  if ((flag == KIN_SUCCESS || flag == KIN_INITIAL_GUESS_OK) &&
+      (settings_.energy_tolerance > 0 || settings_.angular_tolerance > 0)) {
     long extra = 0;
     while (iters + extra < settings_.max_iterations) {
       const Vec xu = Eigen::Map<const Vec>(N_VGetArrayPointer(m.u.get()), n);
       if (xu != m.x) problem.residual(xu, m.f);  // the last evaluation was elsewhere
-      if (problem.energy_residual(xu, m.f) <= settings_.energy_tolerance) break;
+      if (balanced(xu)) break;
       const double residual_before = (m.f.array() * m.scale.array()).abs().maxCoeff();
       check(KINSetFuncNormTol(m.kin.get(), 1e-300), "KINSetFuncNormTol");
       check(KINSetNumMaxIters(m.kin.get(), 1), "KINSetNumMaxIters");

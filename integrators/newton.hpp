@@ -31,6 +31,10 @@ class NewtonProblem {
   /// relative to the energy at stake in the step (see NewtonSettings::
   /// energy_tolerance); 0 when the problem has no such balance.
   virtual double energy_residual(const Vec& /*x*/, const Vec& /*f*/) const { return 0.0; }
+  /// The angular momentum the residual f (at x) leaves in the step,
+  /// relative to the step's scale of it (see NewtonSettings::
+  /// angular_tolerance); 0 when the problem has no such balance.
+  virtual double angular_residual(const Vec& /*x*/, const Vec& /*f*/) const { return 0.0; }
 };
 
 struct NewtonSettings {
@@ -44,6 +48,13 @@ struct NewtonSettings {
   // cost the flat-face blocks 3.5e-8 of their energy); Newton then goes on
   // until the energy residual is met or it stalls at round-off.
   double energy_tolerance = 1e-13;
+  // The same for the angular momentum (NewtonProblem::angular_residual):
+  // a residual at the tolerance changes J by dt/2 sum_A r_A x dq_A, which
+  // over a few hundred contact steps added up to 1.2e-12 of sum |q| |p|
+  // (the sweep's cases 160 and 194). At 1e-15 per step the sweep's largest
+  // is 2.6e-14 (docs/contact.md, "A Newton stop that knows about energy");
+  // 0: not checked.
+  double angular_tolerance = 1e-15;
   // The sparse LU (integrators/klu_solver.hpp): Auto takes UMFPACK where
   // KLU's analysis estimates umfpack_flops or more per unknown, else KLU.
   KluSolver::Backend linear_solver = KluSolver::Backend::Auto;

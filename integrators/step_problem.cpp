@@ -43,6 +43,11 @@ StepProblem::StepProblem(const System& s, GradientKind kind, const State& start,
       sum += 2.0 * mass[i] / (dt * dt) + full_stiffness[i], ++count;
   kappa_ = count ? sum / count : 1.0;
   kinetic0_ = 0.5 * v0_.dot(s_.mass() * v0_);
+  // The angular momentum has a balance only where every term is invariant
+  // under rotations (verify/recorder.cpp, conservation_of).
+  for (const auto* list : {&s_.potentials(), &s_.constraints()})
+    for (const auto& term : *list) angular_balance_ = angular_balance_ && term->symmetry().rotation;
+  for (const Term* term : extra) angular_balance_ = angular_balance_ && term->symmetry().rotation;
   penalty_ = Vec::Zero(m_);
   const int ms = s_.n_constraints();
   for (std::size_t k = 0; k < extra.size(); ++k) {
@@ -523,6 +528,44 @@ double StepProblem::energy_residual(const Vec& x, const Vec& f) const {
     error -= penalty_[l] > 0.0 ? f[n_ + l] / kappa_ * penalty_[l] * increment_[l]
                                : f[n_ + l] * x[n_ + l];
   return scale > 0.0 ? std::abs(error) / scale : 0.0;
+}
+
+// The angular momentum the residual leaves in the step (NewtonProblem).
+// With v1 from the momentum balance, M (v1 - v0) = -dt F, the forces'
+// moment about the midpoint positions is zero for invariant terms (and is
+// the loads' own otherwise), and
+//   J1 - J0 - dt (moment) = e x M v_bar = dt^2/2 sum_A R_A x v_bar_A
+//                          = dt/2 sum_A R_A x dq_A,
+// e = q1 - q0 - dt v_bar = dt^2/2 M^-1 R_q as in energy_residual; the last
+// form is exact since v_bar = (dq - e)/dt and sum_A R_A x (M^-1 R)_A = 0 (M
+// symmetric). Rows with mass only: massless and prescribed rows are not
+// momentum balances. 0 where a term is not invariant under rotations (no
+// balance to keep). Relative to sum_A |q_mid,A| |M dq / dt|_A, the size
+// of J's terms about the origin (the figure the reports' bound divides by).
+double StepProblem::angular_residual(const Vec& x, const Vec& f) const {
+  if (!angular_balance_ || (k_.size() && k_.any())) return 0.0;
+  const int dim = s_.dim();
+  if (dim != 2 && dim != 3) return 0.0;
+  const Vec dq = x.head(n_) - q0_;
+  const Vec p = (s_.mass() * dq) / dt_;
+  const Vec& m = s_.lumped_mass();
+  const std::vector<bool>& prescribed = s_.is_prescribed();
+  Eigen::Vector3d moment = Eigen::Vector3d::Zero();
+  double scale = 0.0;
+  for (int a = 0; (a + 1) * dim <= n_; ++a) {
+    Eigen::Vector3d r = Eigen::Vector3d::Zero(), d = r, mid = r, pa = r;
+    for (int k = 0; k < dim; ++k) {
+      const int i = a * dim + k;
+      const auto iu = static_cast<std::size_t>(i);
+      if (!prescribed[iu] && m[i] > 0.0) r[k] = f[i];
+      d[k] = dq[i];
+      mid[k] = q0_[i] + 0.5 * dq[i];
+      pa[k] = p[i];
+    }
+    moment += r.cross(d);
+    scale += mid.norm() * pa.norm();
+  }
+  return scale > 0.0 ? 0.5 * dt_ * moment.norm() / scale : 0.0;
 }
 
 Vec StepProblem::scale() const {

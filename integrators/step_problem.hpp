@@ -91,6 +91,7 @@ class StepProblem final : public NewtonProblem {
   void residual(const Vec& x, Vec& f) override;
   void jacobian(const Vec& x, SparseMatrix& j) override;
   double energy_residual(const Vec& x, const Vec& f) const override;
+  double angular_residual(const Vec& x, const Vec& f) const override;
   /// Residual scale: lengths on every row (see midpoint_family.hpp).
   Vec scale() const;
 
@@ -138,6 +139,7 @@ class StepProblem final : public NewtonProblem {
   Vec penalty_;  // k_l of each row, 0 for an exact constraint
   std::vector<int> penalty_rows_;
   double kinetic0_ = 0.0;
+  bool angular_balance_ = true;  // every term invariant under rotations
   Vec phi_, force_;
   Vec res_q1_, res_lambda_, res_force_, res_load_;  // the last residual's point and forces
   Triplets trip_;

@@ -33,6 +33,7 @@
 #include "core/quantities.hpp"
 #include "integrators/energy_momentum.hpp"
 #include "integrators/schemes.hpp"
+#include "integrators/step_problem.hpp"
 #include "integrators/stepper.hpp"
 #include "integrators/sundials_support.hpp"
 #include "run/run.hpp"
@@ -699,6 +700,66 @@ TEST(Assembly, SlotMapJacobianEqualsTriplets) {
   // Three kinds x (plain, extra, extra): the sequence changes 6 times.
   EXPECT_EQ(pattern.rebuilds(), 6);
   EXPECT_EQ(mass_pattern.rebuilds(), 6);
+}
+
+// What StepProblem::angular_residual reports is the change of angular
+// momentum the residual leaves in a step: for a free SVK body (every term
+// invariant under rotations) and an end position that solves nothing (a
+// residual of the size of the forces), v1 from the momentum balance
+// M (v1 - v0) = -dt F gives J1 - J0 = dt/2 sum_A R_A x dq_A exactly, and
+// the report is |J1 - J0| over sum_A |q_mid,A| |M dq / dt|_A. A residual
+// at round-off reports round-off.
+TEST(StepProblemBalances, AngularResidualIsTheChangeOfAngularMomentum) {
+  System s(2);
+  add_body(s, rectangle_mesh(Eigen::Vector2d(0.3, -0.2), 2.0, 1.0, 4, 2),
+           paper_material(MaterialModel::SaintVenantKirchhoff));
+  const int n = s.n_dofs();
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  State start;
+  start.q = s.initial_positions();
+  start.v = Vec(n);
+  for (int i = 0; i < n; ++i) {
+    start.q[i] += 0.02 * u(rng);
+    start.v[i] = u(rng);
+  }
+  const double dt = 0.01;
+  const Vec zero = Vec::Zero(n), ones = Vec::Ones(n);
+  StepProblem problem(s, GradientKind::Discrete, start, dt, {}, Vec(), zero, ones);
+  const SparseMatrix& mass = s.mass();
+  Eigen::SimplicialLDLT<SparseMatrix> solve_mass(mass);
+  ASSERT_EQ(solve_mass.info(), Eigen::Success);
+  const auto angular = [&](const Vec& q, const Vec& v) {
+    const Vec p = mass * v;
+    double j = 0.0;
+    for (int a = 0; 2 * a < n; ++a) j += q[2 * a] * p[2 * a + 1] - q[2 * a + 1] * p[2 * a];
+    return j;
+  };
+  Vec x(n), f(n);
+  for (int i = 0; i < n; ++i) x[i] = start.q[i] + dt * start.v[i] + 1e-4 * u(rng);
+  problem.residual(x, f);
+  const Vec dq = x - start.q;
+  const Vec force = f - (2.0 / (dt * dt)) * (mass * (dq - dt * start.v));
+  const Vec v1 = start.v - dt * solve_mass.solve(force);
+  const double dj = angular(x, v1) - angular(start.q, start.v);
+  double predicted = 0.0, scale = 0.0;
+  const Vec p = (mass * dq) / dt;
+  for (int a = 0; 2 * a < n; ++a) {
+    predicted += 0.5 * dt * (f[2 * a] * dq[2 * a + 1] - f[2 * a + 1] * dq[2 * a]);
+    scale += (start.q.segment<2>(2 * a) + 0.5 * dq.segment<2>(2 * a)).norm() *
+             p.segment<2>(2 * a).norm();
+  }
+  EXPECT_GT(std::abs(dj), 1e-6 * scale);  // the residual is far from zero
+  EXPECT_NEAR(dj, predicted, 1e-12 * std::abs(dj));
+  EXPECT_NEAR(problem.angular_residual(x, f), std::abs(dj) / scale, 1e-12 * std::abs(dj) / scale);
+  // At a solution of the step (Newton to round-off) it is round-off.
+  NewtonSettings settings;
+  settings.tolerance = 1e-14;
+  NewtonSolver newton(settings);
+  Vec solution = x;
+  newton.solve(problem, solution, problem.scale());
+  problem.residual(solution, f);
+  EXPECT_LE(problem.angular_residual(solution, f), 1e-15);
 }
 
 // The slots through changing triplet sequences around the kept base (the
