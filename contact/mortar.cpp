@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 
 #include "contact/jet.hpp"
@@ -301,6 +302,19 @@ double MortarGapTerm::coverage(const Vec& q) const {
     c += mortar_pair_share(pi.data() + static_cast<Eigen::Index>(5 * b));
   // A node has two slave segments (one at a surface's end): full coverage 2.
   return c;
+}
+
+double MortarGapTerm::engaged_value(const Vec& q) const {
+  Vec pi;
+  invariants(q, pi);
+  double f = 0.0, c = 0.0;
+  for (int b = 0; b < n_blocks(); ++b) {
+    const auto pb = pi.segment(5 * b, 5);
+    f += block_value(b, pb, 0.0);
+    c += mortar_pair_share(pb.data());
+  }
+  if (!(c > 0.0)) return std::numeric_limits<double>::infinity();
+  return coupled() ? f + coupling(c, nullptr, nullptr) : f;
 }
 
 MortarGapTerm::CurrentWeight MortarGapTerm::current_weight(const Vec& q) const {

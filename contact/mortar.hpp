@@ -141,6 +141,9 @@ class MortarGapTerm final : public Term {
   /// Fraction of the node's segments covered by mortar segments at q (local):
   /// 0 when no master segment overlaps any more.
   double coverage(const Vec& q) const;
+  /// value(q, 0) where coverage(q) > 0, else +infinity (the node is not
+  /// engaged): both from one evaluation of the invariants.
+  double engaged_value(const Vec& q) const;
   /// The node's mortar weight at q (local): w_A = int N_A dgamma over its
   /// mortar segments in the current configuration, the length over which its
   /// multiplier acts (weight() is the reference one, over whole segments),

@@ -79,8 +79,7 @@ double MortarContact::gap(int i, const Vec& q) const {
   if (!t) return std::numeric_limits<double>::infinity();
   Vec local;
   gather(*t, q, local);
-  if (!(t->coverage(local) > 0.0)) return std::numeric_limits<double>::infinity();
-  return t->value(local, 0.0);
+  return t->engaged_value(local);
 }
 
 MortarGapTerm::CurrentWeight MortarContact::current_weight(int i, const Vec& q) const {
