@@ -38,6 +38,39 @@ T facing_fade(const T pi[5]) {
   return (u * u) * u * (6.0 * (u * u) + (10.0 - 15.0 * u));
 }
 
+// The distance fade (mortar.hpp): with r = the mean of the squared gap at
+// the mortar segment's two ends over the slave segment's length squared, 1
+// up to kReachFull, 0 from kReachNone on, and between them the C2
+// smootherstep in u = (kReachNone - r) / (kReachNone - kReachFull).
+constexpr double kReachFull = 0.25;  // a root mean square gap of half the slave segment
+constexpr double kReachNone = 1.0;   // ... of the whole slave segment
+
+// r of a pair whose mortar segment is [sa, sb]: the gap times |a| is
+// pi4 + (pi5 - pi4) (s - pi2) / (pi3 - pi2) there (mortar.hpp).
+template <class T>
+T reach_ratio(const T pi[5], const T& sa, const T& sb) {
+  const T slope = (pi[4] - pi[3]) / (pi[2] - pi[1]);
+  const T ga = pi[3] + slope * (sa - pi[1]);
+  const T gb = pi[3] + slope * (sb - pi[1]);
+  return (0.5 * (ga * ga + gb * gb)) / (pi[0] * pi[0]);
+}
+
+template <class T>
+T distance_fade(const T pi[5], const T& sa, const T& sb) {
+  const T r = reach_ratio(pi, sa, sb);
+  const double v = value_of(r);
+  if (v <= kReachFull) return T(1.0);
+  if (v >= kReachNone) return T(0.0);
+  const T u = (1.0 / (kReachNone - kReachFull)) * ((-1.0) * r + kReachNone);
+  return (u * u) * u * (6.0 * (u * u) + (10.0 - 15.0 * u));
+}
+
+// Both fades of a pair with a mortar segment [sa, sb].
+template <class T>
+T pair_fade(const T pi[5], const T& sa, const T& sb, bool with_distance) {
+  return with_distance ? facing_fade(pi) * distance_fade(pi, sa, sb) : facing_fade(pi);
+}
+
 }  // namespace
 
 // The mortar segment [sa, sb] of a pair on its slave segment's s in [0, pi1],
@@ -52,7 +85,7 @@ bool mortar_segment(const T pi[5], T& sa, T& sb) {
 }
 
 template <class T>
-T mortar_pair_gap(const T pi[5], int a) {
+T mortar_pair_gap(const T pi[5], int a, bool with_distance) {
   const T& p1 = pi[0];
   const T& p2 = pi[1];
   const T& p3 = pi[2];
@@ -71,31 +104,36 @@ T mortar_pair_gap(const T pi[5], int a) {
     const T n = a == 0 ? 1.0 - s / p1 : s / p1;
     sum = sum + n * gap_times_len;
   }
-  return facing_fade(pi) * (sum * half / p1);
+  return pair_fade(pi, sa, sb, with_distance) * (sum * half / p1);
 }
 
 template <class T>
-T mortar_pair_share(const T pi[5]) {
+T mortar_pair_share(const T pi[5], bool with_distance) {
   T sa, sb;
   if (!mortar_segment(pi, sa, sb)) return T(0.0);
-  return facing_fade(pi) * ((sb - sa) / pi[0]);
+  return pair_fade(pi, sa, sb, with_distance) * ((sb - sa) / pi[0]);
 }
 
-unsigned mortar_pair_case(const double pi[5]) {
+unsigned mortar_pair_case(const double pi[5], bool with_distance) {
   // Bits: facing, p1 > 0, p3 > 0 (sa = p3), p2 < p1 (sb = p2), overlap, and
-  // the facing fade's piece (whole, fading, none): its joins are only C2,
-  // and a step across one is formed from the direct quotient too.
+  // the fades' pieces (whole, fading, none): their joins are only C2, and a
+  // step across one is formed from the direct quotient too.
   const double sa = std::max(0.0, pi[2]), sb = std::min(pi[0], pi[1]);
   const double c2 = facing_cos2(pi);
+  unsigned reach = 0;
+  if (with_distance && sb > sa && pi[2] < pi[1] && pi[0] > 0.0) {
+    const double r = reach_ratio(pi, sa, sb);
+    reach = (r <= kReachFull ? 128u : 0u) | (r < kReachNone ? 256u : 0u);
+  }
   return (pi[2] < pi[1] ? 1u : 0u) | (pi[0] > 0.0 ? 2u : 0u) | (pi[2] > 0.0 ? 4u : 0u) |
          (pi[1] < pi[0] ? 8u : 0u) | (sb > sa ? 16u : 0u) | (c2 >= kFacingFull ? 32u : 0u) |
-         (c2 > kFacingNone ? 64u : 0u);
+         (c2 > kFacingNone ? 64u : 0u) | reach;
 }
 
-template double mortar_pair_gap<double>(const double pi[5], int a);
-template Jet<5> mortar_pair_gap<Jet<5>>(const Jet<5> pi[5], int a);
-template Dual<5> mortar_pair_gap<Dual<5>>(const Dual<5> pi[5], int a);
-template Taylor2 mortar_pair_gap<Taylor2>(const Taylor2 pi[5], int a);
+template double mortar_pair_gap<double>(const double pi[5], int a, bool with_distance);
+template Jet<5> mortar_pair_gap<Jet<5>>(const Jet<5> pi[5], int a, bool with_distance);
+template Dual<5> mortar_pair_gap<Dual<5>>(const Dual<5> pi[5], int a, bool with_distance);
+template Taylor2 mortar_pair_gap<Taylor2>(const Taylor2 pi[5], int a, bool with_distance);
 
 namespace {
 
@@ -138,11 +176,12 @@ std::vector<int> node_dofs(const std::vector<int>& nodes) {
 }  // namespace
 
 MortarGapTerm::MortarGapTerm(const std::vector<int>& nodes, std::vector<MortarPair> pairs,
-                             double weight, std::string name, double barrier)
+                             double weight, std::string name, double barrier, bool distance_fade)
     : Term(node_dofs(nodes), 5 * static_cast<int>(pairs.size()), 5),
       pairs_(std::move(pairs)),
       weight_(weight),
       barrier_(barrier),
+      distance_fade_(distance_fade),
       name_(std::move(name)) {
   if (!(weight_ > 0)) throw std::invalid_argument(name_ + ": mortar weight must be positive");
 }
@@ -228,20 +267,23 @@ void MortarGapTerm::add_invariant_hessians(const Vec& w, Mat& kmat) const {
 
 double MortarGapTerm::block_value(int block, const VecRef& pi, double) const {
   const double p[5] = {pi[0], pi[1], pi[2], pi[3], pi[4]};
-  return mortar_pair_gap(p, pairs_[static_cast<std::size_t>(block)].slave_node) / weight_;
+  return mortar_pair_gap(p, pairs_[static_cast<std::size_t>(block)].slave_node, distance_fade_) /
+         weight_;
 }
 
 void MortarGapTerm::block_gradient(int block, const VecRef& pi, double, Eigen::Ref<Vec> g) const {
   Dual<5> p[5];
   for (int k = 0; k < 5; ++k) p[k] = Dual<5>::variable(pi[k], k);
-  const Dual<5> f = mortar_pair_gap(p, pairs_[static_cast<std::size_t>(block)].slave_node);
+  const Dual<5> f =
+      mortar_pair_gap(p, pairs_[static_cast<std::size_t>(block)].slave_node, distance_fade_);
   g = f.g / weight_;
 }
 
 void MortarGapTerm::block_hessian(int block, const VecRef& pi, double, Eigen::Ref<Mat> h) const {
   Jet<5> p[5];
   for (int k = 0; k < 5; ++k) p[k] = Jet<5>::variable(pi[k], k);
-  const Jet<5> f = mortar_pair_gap(p, pairs_[static_cast<std::size_t>(block)].slave_node);
+  const Jet<5> f =
+      mortar_pair_gap(p, pairs_[static_cast<std::size_t>(block)].slave_node, distance_fade_);
   h = f.h / weight_;
 }
 
@@ -249,31 +291,34 @@ double MortarGapTerm::block_curvature(int block, const VecRef& pi, double, const
                                       Mat&) const {
   Taylor2 p[5];
   for (int k = 0; k < 5; ++k) p[k] = Taylor2(pi[k], d[k], 0.0);
-  return mortar_pair_gap(p, pairs_[static_cast<std::size_t>(block)].slave_node).d2 / weight_;
+  return mortar_pair_gap(p, pairs_[static_cast<std::size_t>(block)].slave_node, distance_fade_).d2 /
+         weight_;
 }
 
 PathSmoothness MortarGapTerm::smoothness_between(int, const VecRef& pi0, const VecRef& pi1) const {
   const double a[5] = {pi0[0], pi0[1], pi0[2], pi0[3], pi0[4]};
   const double b[5] = {pi1[0], pi1[1], pi1[2], pi1[3], pi1[4]};
-  return mortar_pair_case(a) == mortar_pair_case(b) ? PathSmoothness::Smooth : PathSmoothness::Kink;
+  return mortar_pair_case(a, distance_fade_) == mortar_pair_case(b, distance_fade_)
+             ? PathSmoothness::Smooth
+             : PathSmoothness::Kink;
 }
 
 double MortarGapTerm::block_share(int, const VecRef& pi, Vec* g, Mat* h) const {
   if (!g && !h) {
     const double p[5] = {pi[0], pi[1], pi[2], pi[3], pi[4]};
-    return mortar_pair_share(p);
+    return mortar_pair_share(p, distance_fade_);
   }
   if (h) {
     Jet<5> p[5];
     for (int k = 0; k < 5; ++k) p[k] = Jet<5>::variable(pi[k], k);
-    const Jet<5> f = mortar_pair_share(p);
+    const Jet<5> f = mortar_pair_share(p, distance_fade_);
     if (g) *g = f.g;
     *h = f.h;
     return f.v;
   }
   Dual<5> p[5];
   for (int k = 0; k < 5; ++k) p[k] = Dual<5>::variable(pi[k], k);
-  const Dual<5> f = mortar_pair_share(p);
+  const Dual<5> f = mortar_pair_share(p, distance_fade_);
   *g = f.g;
   return f.v;
 }
@@ -299,7 +344,7 @@ double MortarGapTerm::coverage(const Vec& q) const {
   invariants(q, pi);
   double c = 0.0;
   for (std::size_t b = 0; b < pairs_.size(); ++b)
-    c += mortar_pair_share(pi.data() + static_cast<Eigen::Index>(5 * b));
+    c += mortar_pair_share(pi.data() + static_cast<Eigen::Index>(5 * b), distance_fade_);
   // A node has two slave segments (one at a surface's end): full coverage 2.
   return c;
 }
@@ -311,7 +356,7 @@ double MortarGapTerm::engaged_value(const Vec& q) const {
   for (int b = 0; b < n_blocks(); ++b) {
     const auto pb = pi.segment(5 * b, 5);
     f += block_value(b, pb, 0.0);
-    c += mortar_pair_share(pb.data());
+    c += mortar_pair_share(pb.data(), distance_fade_);
   }
   if (!(c > 0.0)) return std::numeric_limits<double>::infinity();
   return coupled() ? f + coupling(c, nullptr, nullptr) : f;
@@ -329,8 +374,8 @@ MortarGapTerm::CurrentWeight MortarGapTerm::current_weight(const Vec& q) const {
     // s = a.(x - x1s) runs over [0, |a|^2]: the arc length is s / |a|, and
     // int N_2 ds = (sb^2 - sa^2) / (2 pi1), N_1 = 1 - N_2.
     const double n2 = (sb * sb - sa * sa) / (2.0 * p1);
-    const double length =
-        facing_fade(pb) * (pairs_[b].slave_node == 0 ? (sb - sa) - n2 : n2) / std::sqrt(p1);
+    const double length = pair_fade(pb, sa, sb, distance_fade_) *
+                          (pairs_[b].slave_node == 0 ? (sb - sa) - n2 : n2) / std::sqrt(p1);
     // a = x2s - x1s; the outward normal is a turned clockwise, (a_y, -a_x) / |a|.
     const auto& n = pairs_[b].local_nodes;
     const double ax = q[dof(n[1], 0)] - q[dof(n[0], 0)], ay = q[dof(n[1], 1)] - q[dof(n[0], 1)];

@@ -66,6 +66,21 @@
 // changed at a step's start (docs/hard-cases.md, kind B). Faded, it enters
 // and leaves the sum continuously. Real contact pairs face each other
 // within a few degrees and are unchanged.
+//
+// The distance fade. A pair counts only as far as its master segment lies
+// near the slave segment: both its contributions are multiplied as well by
+// a C2 weight of r, the mean of the squared gap at the mortar segment's two
+// ends over the slave segment's length squared: 1 up to a root mean square
+// gap of half the slave segment (r = 1/4), 0 from the whole length on (r =
+// 1), a smootherstep in r between. At a corner the short face sees, through
+// the corner, the master surface the long face touches, 0.16-0.28 behind it
+// (three to five of its lengths; sweep case 109, docs/hard-cases.md): that
+// pair entered the sum whole when the search found it at a step's start,
+// and the node's function jumped by -7.8e-4. Faded, pairs the search takes
+// in or drops (farther than its margin, one mean master segment length or
+// more, from the slave segment) weigh nothing where the slave segment is no
+// longer than the margin. Real contact pairs lie within a small fraction of
+// a segment and are unchanged. ContactOptions::distance_fade turns it off.
 #pragma once
 
 #include <array>
@@ -79,12 +94,13 @@ namespace emdae {
 /// Contribution of a segment pair to the weighted gap of slave node `a` (0:
 /// the segment's first node, 1: its second), as a function of pi1..pi5.
 /// Zero when the master segment does not face the slave or does not overlap.
+/// `with_distance`: with the distance fade (above) as well as the facing fade.
 template <class T>
-T mortar_pair_gap(const T pi[5], int a);
+T mortar_pair_gap(const T pi[5], int a, bool with_distance = true);
 
 /// The segmentation case of mortar_pair_gap at pi: a bit pattern that is
 /// equal for two points on the same smooth piece.
-unsigned mortar_pair_case(const double pi[5]);
+unsigned mortar_pair_case(const double pi[5], bool with_distance = true);
 
 /// One segment pair of a slave node's gap: positions in the term's local
 /// node list of x1s, x2s, x1m, x2m, and which slave node the term is for.
@@ -110,8 +126,9 @@ class MortarGapTerm final : public Term {
   /// @param nodes  global node indices of the term's local nodes (2D).
   /// @param barrier  the coverage barrier's height R (a length); 0: none,
   ///                 and then the function is the weighted gap alone.
+  /// @param distance_fade  pairs weighed by the distance fade (above) too.
   MortarGapTerm(const std::vector<int>& nodes, std::vector<MortarPair> pairs, double weight,
-                std::string name, double barrier = 0.0);
+                std::string name, double barrier = 0.0, bool distance_fade = true);
 
   void invariants(const Vec& q, Vec& pi) const override;
   void invariant_jacobian(const Vec& q, Mat& dpi) const override;
@@ -161,6 +178,7 @@ class MortarGapTerm final : public Term {
   std::vector<MortarPair> pairs_;
   double weight_;
   double barrier_ = 0.0;
+  bool distance_fade_ = true;
   std::string name_;
 };
 

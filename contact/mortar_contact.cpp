@@ -146,10 +146,11 @@ void MortarContact::prepare(const Vec& q, const Vec& v, double dt) {
       }
     }
     n_pairs_ += static_cast<long>(pairs.size());
-    terms_[i] = pairs.empty() ? nullptr
-                              : std::make_unique<MortarGapTerm>(
-                                    nodes, std::move(pairs), weights_[i],
-                                    describe(static_cast<int>(i)), kBarrierHeight * weights_[i]);
+    terms_[i] = pairs.empty()
+                    ? nullptr
+                    : std::make_unique<MortarGapTerm>(
+                          nodes, std::move(pairs), weights_[i], describe(static_cast<int>(i)),
+                          kBarrierHeight * weights_[i], options_.distance_fade);
   }
 }
 

@@ -35,6 +35,10 @@ struct ContactOptions {
   /// 0)^2, the mortar form of epsilon / 2 int min(g, 0)^2: pressure p_A =
   /// epsilon max(-Phi_A, 0), penetration p / epsilon.
   double penalty = 0.0;
+  /// Pairs weighed by their distance as well as by how they face
+  /// (contact/mortar.hpp, "The distance fade"); false: by how they face only,
+  /// as before 2026-11-27 (the tests compare the two).
+  bool distance_fade = true;
 };
 
 class MortarContact final : public UnilateralConstraints {

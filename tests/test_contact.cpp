@@ -13,6 +13,7 @@
 
 #include <Eigen/Geometry>
 #include <cmath>
+#include <limits>
 #include <random>
 
 #include "contact/jet.hpp"
@@ -218,10 +219,13 @@ TEST(MortarGapTerm, CurrentWeightIsOverTheCurrentMortarSegments) {
 // height `depth` (inside the slave body where positive) whose right end is at
 // x = xi: the first overlap of node 1's segment (0, 1) is [0, xi], coverage
 // xi. Local nodes 0..2 slave, 3 and 4 the master's ends.
-std::unique_ptr<MortarGapTerm> sliver_term(double barrier) {
+// `distance_fade`: off for the tests of the barrier and the facing fade,
+// whose tilted masters reach far from the slave segment (the distance fade
+// has its own tests below).
+std::unique_ptr<MortarGapTerm> sliver_term(double barrier, bool distance_fade = false) {
   std::vector<MortarPair> pairs = {{{0, 1, 3, 4}, 1}, {{1, 2, 3, 4}, 0}};
   return std::make_unique<MortarGapTerm>(std::vector<int>{0, 1, 2, 3, 4}, pairs, 1.0, "sliver",
-                                         barrier);
+                                         barrier, distance_fade);
 }
 
 Vec sliver_config(double xi, double depth, double tilt = 0.0) {
@@ -295,12 +299,18 @@ TEST(MortarGapTerm, CoverageBarrierGradientAndJacobianAreTheFunctionsDerivatives
 // The discrete gradient of a sliver_term between q0 and q1: the energy
 // identity to round-off, and zero resultant and moment about the origin at
 // q_mid (translation and rotation invariance: both momenta kept).
+// `relative`: of |f1 - f0| (the quadrature shortcut's error where a fade is
+// steep, up to 5e-13 of it in the distance fade's band).
 void expect_discrete_gradient_identities(const MortarGapTerm& term, const Vec& q0, const Vec& q1,
-                                         TermWorkspace& ws, int trial) {
+                                         TermWorkspace& ws, int trial, double relative = 1e-13) {
   Vec g;
   term_gradient(term, GradientKind::Discrete, q0, q1, 0, 0, g, nullptr, ws);
   const double f0 = term.value(q0, 0), f1 = term.value(q1, 0);
-  EXPECT_NEAR(g.dot(q1 - q0), f1 - f0, 1e-16 + 1e-13 * std::abs(f1 - f0)) << trial;
+  // To round-off: of the difference, of the values themselves and of the
+  // sum g . (q1 - q0) (its terms may be larger than their sum).
+  const double round_off = 8.0 * std::numeric_limits<double>::epsilon() *
+                           (std::abs(f0) + std::abs(f1) + g.norm() * (q1 - q0).norm());
+  EXPECT_NEAR(g.dot(q1 - q0), f1 - f0, 1e-16 + relative * std::abs(f1 - f0) + round_off) << trial;
   const Vec mid = 0.5 * (q0 + q1);
   Eigen::Vector2d resultant = Eigen::Vector2d::Zero();
   double moment = 0.0;
@@ -411,6 +421,92 @@ TEST(MortarGapTerm, FacingFadeKeepsTheGradientsIdentities) {
     faded += t0 > 1.0 && t0 < std::sqrt(19.0);
   }
   EXPECT_GE(faded, 120);  // most trials start where the pair fades
+}
+
+// The distance fade: a master segment parallel to the slave's at depth d
+// (the slave segments have length 1, so r = d^2) counts whole up to |d| =
+// 1/2, not at all from |d| = 1 on (value and coverage 0), and continuously
+// and monotonically less between; on either side of the slave segment.
+TEST(MortarGapTerm, DistanceFadeWeighsAPairByItsDistance) {
+  auto faded = sliver_term(0.0, true), plain = sliver_term(0.0, false);
+  const double xi = 0.5;
+  for (double depth : {-0.5, -0.2, 0.05, 0.3, 0.5}) {
+    const Vec q = sliver_config(xi, depth);
+    EXPECT_EQ(faded->value(q, 0.0), plain->value(q, 0.0)) << depth;
+    EXPECT_NEAR(plain->value(q, 0.0), -depth * xi * xi / 2.0, 1e-15) << depth;
+    EXPECT_EQ(faded->coverage(q), xi) << depth;
+  }
+  for (double depth : {-3.0, -1.0, 1.0, 1.5}) {
+    const Vec q = sliver_config(xi, depth);
+    EXPECT_EQ(faded->value(q, 0.0), 0.0) << depth;
+    EXPECT_EQ(faded->coverage(q), 0.0) << depth;
+  }
+  for (double sign : {-1.0, 1.0}) {
+    const int n = 4000;
+    double last_share = xi, last_weight = 1.0, max_jump = 0.0;
+    for (int i = 1; i <= n; ++i) {
+      const double depth = sign * (0.5 + 0.5 * i / n);
+      const Vec q = sliver_config(xi, depth);
+      const double share = faded->coverage(q);
+      const double weight = faded->value(q, 0.0) / plain->value(q, 0.0);
+      EXPECT_LE(share, last_share + 1e-15) << depth;
+      EXPECT_NEAR(weight, share / xi, 1e-12) << depth;  // one fade on both
+      max_jump = std::max(max_jump, last_weight - weight);
+      last_share = share, last_weight = weight;
+    }
+    // |d fade / d depth| <= 1.875 * 2 |d| / 0.75 <= 5 over steps of 1.25e-4.
+    EXPECT_LT(max_jump, 5.0 * 0.5 / n + 1e-12);
+    EXPECT_NEAR(last_share, 0.0, 1e-12);
+  }
+}
+
+// Where a pair fades with its distance the exact gradient and its Jacobian
+// are the function's derivatives, the discrete gradient keeps the energy
+// identity and the momenta, and steps across the fade's joins (r = 1/4 and
+// 1, only C2) are formed from the direct quotient: exact there too.
+TEST(MortarGapTerm, DistanceFadeKeepsTheGradientsIdentities) {
+  auto term = sliver_term(kBarrierHeight, true);
+  TermWorkspace ws;
+  std::mt19937 rng(29);
+  std::uniform_real_distribution<double> tilt(-0.3, 0.3), xi(0.2, 0.8), depth(0.3, 1.1);
+  int fading = 0;
+  for (int trial = 0; trial < 200; ++trial) {
+    const Vec q0 = sliver_config(xi(rng), depth(rng), tilt(rng));
+    const Vec q1 = trial % 2 ? sliver_config(xi(rng), depth(rng), tilt(rng))
+                             : Vec(q0 + 1e-4 * Vec::Random(q0.size()));
+    expect_discrete_gradient_identities(*term, q0, q1, ws, trial, 1e-12);
+    Vec ge, gp, gm;
+    Mat jac;
+    term_gradient(*term, GradientKind::Exact, q0, q0, 0, 0, ge, &jac, ws);
+    const double h = 1e-6, scale = ge.cwiseAbs().maxCoeff();
+    for (Eigen::Index j = 0; j < q0.size(); ++j) {
+      Vec qp = q0, qm = q0;
+      qp[j] += h, qm[j] -= h;
+      EXPECT_NEAR(ge[j], (term->value(qp, 0) - term->value(qm, 0)) / (2 * h), 1e-6 * scale + 5e-11)
+          << trial << " " << j;
+      term_gradient(*term, GradientKind::Exact, qp, qp, 0, 0, gp, nullptr, ws);
+      term_gradient(*term, GradientKind::Exact, qm, qm, 0, 0, gm, nullptr, ws);
+      EXPECT_LE(((gp - gm) / (2 * h) - jac.col(j)).cwiseAbs().maxCoeff(),
+                1e-5 * jac.cwiseAbs().maxCoeff() + 1e-9)
+          << trial << " " << j;
+    }
+    const double f = term->value(q0, 0), whole = sliver_term(kBarrierHeight)->value(q0, 0);
+    fading += f != whole && f != 0.0;
+  }
+  EXPECT_GE(fading, 100);  // most trials start where the pair fades
+  // Small steps across the joins, a parallel master at depth 1/2 and 1.
+  double worst = 0.0;
+  for (double join : {0.5, 1.0})
+    for (double h : {1e-2, 1e-3, 1e-4})
+      for (double where : {-0.7, 0.0, 0.4}) {
+        const Vec q0 = sliver_config(0.5, join + (where - 0.5) * h);
+        const Vec q1 = sliver_config(0.5, join + (where + 0.5) * h);
+        Vec g;
+        term_gradient(*term, GradientKind::Discrete, q0, q1, 0, 0, g, nullptr, ws);
+        const double df = term->value(q1, 0) - term->value(q0, 0);
+        worst = std::max(worst, std::abs(g.dot(q1 - q0) - df));
+      }
+  EXPECT_LE(worst, 1e-14);
 }
 
 // Steps across the facing fade's joins (c2 = 0.5 at tilt 1, c2 = 0.05 at

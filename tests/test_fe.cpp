@@ -762,6 +762,57 @@ TEST(StepProblemBalances, AngularResidualIsTheChangeOfAngularMomentum) {
   EXPECT_LE(problem.angular_residual(solution, f), 1e-15);
 }
 
+// Newton's stop on the balances: a solve that meets the residual tolerance
+// only at max_iterations and still leaves energy in the step
+// (NewtonProblem::energy_residual above NewtonSettings::energy_tolerance)
+// has not converged, and says why. With one iteration left it makes that
+// iteration and converges (one extra iteration: integrators/newton.cpp). f(x)
+// = x^3 has Newton converge linearly (x <- 2x/3), so the iteration that
+// meets the tolerance is far from round-off.
+struct CubicProblem final : NewtonProblem {
+  double energy_left = 0.0;
+  int size() const override { return 1; }
+  void residual(const Vec& x, Vec& f) override {
+    f.resize(1);
+    f[0] = x[0] * x[0] * x[0];
+  }
+  void jacobian(const Vec& x, SparseMatrix& j) override {
+    j = SparseMatrix(1, 1);
+    j.insert(0, 0) = 3.0 * x[0] * x[0];
+    j.makeCompressed();
+  }
+  double energy_residual(const Vec&, const Vec&) const override { return energy_left; }
+};
+
+TEST(NewtonBalances, AnUnmetEnergyBalanceAtTheCapIsNoConvergence) {
+  NewtonSettings settings;
+  settings.tolerance = 1e-10;
+  settings.max_iterations = 50;
+  settings.jacobian_reuse = 1;
+  const auto solve = [&](int cap, double left) {
+    settings.max_iterations = cap;
+    CubicProblem problem;
+    problem.energy_left = left;
+    NewtonSolver newton(settings);
+    Vec x = Vec::Ones(1);
+    return newton.solve(problem, x, Vec::Ones(1));
+  };
+  const NewtonResult free = solve(50, 0.0);
+  ASSERT_TRUE(free.converged) << free.message;
+  const int needed = free.iterations;  // 19: (2/3)^19 ~ 4.5e-4, cubed 9e-11
+  EXPECT_GE(needed, 15);
+  const NewtonResult at_cap = solve(needed, 1.0);
+  EXPECT_FALSE(at_cap.converged) << at_cap.message;
+  EXPECT_EQ(at_cap.iterations, needed);
+  EXPECT_NE(at_cap.message.find("energy or angular momentum residual"), std::string::npos)
+      << at_cap.message;
+  const NewtonResult one_left = solve(needed + 1, 1.0);
+  EXPECT_TRUE(one_left.converged) << one_left.message;
+  EXPECT_EQ(one_left.iterations, needed + 1);
+  const NewtonResult balanced = solve(needed, 0.0);
+  EXPECT_TRUE(balanced.converged) << balanced.message;
+}
+
 // The slots through changing triplet sequences around the kept base (the
 // potential blocks and M): constraint rows and columns past the dofs (a
 // Jacobian of size n + m), entries inside and outside the elements' pattern,
