@@ -322,6 +322,29 @@ void expect_discrete_gradient_identities(const MortarGapTerm& term, const Vec& q
   EXPECT_LE(std::abs(moment), 1e-12 * g.norm()) << trial;
 }
 
+// The exact gradient and its Jacobian against central differences of the
+// function and of the gradient. Where a fade is steep the third derivatives
+// are large (1e4): central differences are accurate to about 1e-12 at h =
+// 1e-6, and their round-off is about 2e-11.
+void expect_exact_gradient_and_jacobian(const MortarGapTerm& term, const Vec& q, TermWorkspace& ws,
+                                        int trial) {
+  Vec ge, gp, gm;
+  Mat jac;
+  term_gradient(term, GradientKind::Exact, q, q, 0, 0, ge, &jac, ws);
+  const double h = 1e-6, scale = ge.cwiseAbs().maxCoeff();
+  for (Eigen::Index j = 0; j < q.size(); ++j) {
+    Vec qp = q, qm = q;
+    qp[j] += h, qm[j] -= h;
+    EXPECT_NEAR(ge[j], (term.value(qp, 0) - term.value(qm, 0)) / (2 * h), 1e-6 * scale + 5e-11)
+        << trial << " " << j;
+    term_gradient(term, GradientKind::Exact, qp, qp, 0, 0, gp, nullptr, ws);
+    term_gradient(term, GradientKind::Exact, qm, qm, 0, 0, gm, nullptr, ws);
+    EXPECT_LE(((gp - gm) / (2 * h) - jac.col(j)).cwiseAbs().maxCoeff(),
+              1e-5 * jac.cwiseAbs().maxCoeff() + 1e-9)
+        << trial << " " << j;
+  }
+}
+
 // The discrete gradient of a function with the barrier keeps the energy
 // identity exactly, across c1 and within the barrier, and like the gap's it
 // neither pushes nor turns the pair as a whole (zero resultant and moment
@@ -398,25 +421,7 @@ TEST(MortarGapTerm, FacingFadeKeepsTheGradientsIdentities) {
     const Vec q1 = trial % 2 ? sliver_config(xi(rng), depth(rng), tilt(rng))
                              : Vec(q0 + 1e-4 * Vec::Random(q0.size()));
     expect_discrete_gradient_identities(*term, q0, q1, ws, trial);
-    // Exact gradient and Jacobian against central differences.
-    Vec ge, gp, gm;
-    Mat jac;
-    term_gradient(*term, GradientKind::Exact, q0, q0, 0, 0, ge, &jac, ws);
-    // Where the fade is steep the third derivatives are large (1e4): central
-    // differences are accurate to about 1e-12 at h = 1e-6, and their
-    // round-off is about 2e-11.
-    const double h = 1e-6, scale = ge.cwiseAbs().maxCoeff();
-    for (Eigen::Index j = 0; j < q0.size(); ++j) {
-      Vec qp = q0, qm = q0;
-      qp[j] += h, qm[j] -= h;
-      EXPECT_NEAR(ge[j], (term->value(qp, 0) - term->value(qm, 0)) / (2 * h), 1e-6 * scale + 5e-11)
-          << trial << " " << j;
-      term_gradient(*term, GradientKind::Exact, qp, qp, 0, 0, gp, nullptr, ws);
-      term_gradient(*term, GradientKind::Exact, qm, qm, 0, 0, gm, nullptr, ws);
-      EXPECT_LE(((gp - gm) / (2 * h) - jac.col(j)).cwiseAbs().maxCoeff(),
-                1e-5 * jac.cwiseAbs().maxCoeff() + 1e-9)
-          << trial << " " << j;
-    }
+    expect_exact_gradient_and_jacobian(*term, q0, ws, trial);
     const double t0 = q0[9] - q0[7];  // the master's tilt
     faded += t0 > 1.0 && t0 < std::sqrt(19.0);
   }
@@ -475,21 +480,7 @@ TEST(MortarGapTerm, DistanceFadeKeepsTheGradientsIdentities) {
     const Vec q1 = trial % 2 ? sliver_config(xi(rng), depth(rng), tilt(rng))
                              : Vec(q0 + 1e-4 * Vec::Random(q0.size()));
     expect_discrete_gradient_identities(*term, q0, q1, ws, trial, 1e-12);
-    Vec ge, gp, gm;
-    Mat jac;
-    term_gradient(*term, GradientKind::Exact, q0, q0, 0, 0, ge, &jac, ws);
-    const double h = 1e-6, scale = ge.cwiseAbs().maxCoeff();
-    for (Eigen::Index j = 0; j < q0.size(); ++j) {
-      Vec qp = q0, qm = q0;
-      qp[j] += h, qm[j] -= h;
-      EXPECT_NEAR(ge[j], (term->value(qp, 0) - term->value(qm, 0)) / (2 * h), 1e-6 * scale + 5e-11)
-          << trial << " " << j;
-      term_gradient(*term, GradientKind::Exact, qp, qp, 0, 0, gp, nullptr, ws);
-      term_gradient(*term, GradientKind::Exact, qm, qm, 0, 0, gm, nullptr, ws);
-      EXPECT_LE(((gp - gm) / (2 * h) - jac.col(j)).cwiseAbs().maxCoeff(),
-                1e-5 * jac.cwiseAbs().maxCoeff() + 1e-9)
-          << trial << " " << j;
-    }
+    expect_exact_gradient_and_jacobian(*term, q0, ws, trial);
     const double f = term->value(q0, 0), whole = sliver_term(kBarrierHeight)->value(q0, 0);
     fading += f != whole && f != 0.0;
   }
