@@ -51,8 +51,8 @@ constexpr int kStepsAfterTouch = 30;
 // The groups: cases [0, kQuick) and [kQuick, kDefault) run by default.
 constexpr int kQuick = 4;
 constexpr int kDefault = 48;
-// Known failing (docs/hard-cases.md, "Known failing"): none of the 200. All
-// 200 conserve the energy (at most 4.0e-11). There were 33 before the
+// Known failing (docs/hard-cases.md, "Known failing"): none of the 200 (the
+// energy at most 2.7e-10, case 171). There were 33 before the
 // coverage barrier and the facing fade (contact/mortar.hpp: kinds A, A'', B
 // and N of the first diagnosis, nodes entering at jumps of their
 // functions), 15 with the barrier alone, 6 until steps across the fade's
