@@ -28,14 +28,20 @@ T facing_cos2(const T pi[5]) {
   return d2 / (d2 + e * e);
 }
 
+// 1 from x = full on, 0 up to x = none (none < full), and between them the
+// C2 smootherstep u^3 (10 - 15 u + 6 u^2) in u = (x - none) / (full - none).
+template <class T>
+T rising_fade(const T& x, double none, double full) {
+  const double v = value_of(x);
+  if (v >= full) return T(1.0);
+  if (v <= none) return T(0.0);
+  const T u = (1.0 / (full - none)) * (x + (-none));
+  return (u * u) * u * (6.0 * (u * u) + (10.0 - 15.0 * u));
+}
+
 template <class T>
 T facing_fade(const T pi[5]) {
-  const T c2 = facing_cos2(pi);
-  const double v = value_of(c2);
-  if (v >= kFacingFull) return T(1.0);
-  if (v <= kFacingNone) return T(0.0);
-  const T u = (1.0 / (kFacingFull - kFacingNone)) * (c2 + (-kFacingNone));
-  return (u * u) * u * (6.0 * (u * u) + (10.0 - 15.0 * u));
+  return rising_fade(facing_cos2(pi), kFacingNone, kFacingFull);
 }
 
 // The distance fade (mortar.hpp): with r = the mean of the squared gap at
@@ -55,14 +61,10 @@ T reach_ratio(const T pi[5], const T& sa, const T& sb) {
   return (0.5 * (ga * ga + gb * gb)) / (pi[0] * pi[0]);
 }
 
+// It falls as r grows: the rising fade of -r.
 template <class T>
 T distance_fade(const T pi[5], const T& sa, const T& sb) {
-  const T r = reach_ratio(pi, sa, sb);
-  const double v = value_of(r);
-  if (v <= kReachFull) return T(1.0);
-  if (v >= kReachNone) return T(0.0);
-  const T u = (1.0 / (kReachNone - kReachFull)) * ((-1.0) * r + kReachNone);
-  return (u * u) * u * (6.0 * (u * u) + (10.0 - 15.0 * u));
+  return rising_fade((-1.0) * reach_ratio(pi, sa, sb), -kReachNone, -kReachFull);
 }
 
 // Both fades of a pair with a mortar segment [sa, sb].

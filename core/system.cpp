@@ -67,10 +67,20 @@ void System::add_mass_group(const std::vector<int>& nodes, const std::vector<int
   assembled_ = false;
 }
 
+namespace {
+
+Symmetry both(Symmetry a, Symmetry b) {
+  return {a.translation && b.translation, a.rotation && b.rotation};
+}
+
+}  // namespace
+
 void System::add_potential(std::unique_ptr<Term> term) {
+  term_symmetry_ = both(term_symmetry_, term->symmetry());
   potentials_.push_back(std::move(term));
 }
 void System::add_constraint(std::unique_ptr<Term> term) {
+  term_symmetry_ = both(term_symmetry_, term->symmetry());
   constraints_.push_back(std::move(term));
 }
 
@@ -122,6 +132,9 @@ std::unique_ptr<Term> System::pop_constraint() {
   if (constraints_.empty()) throw std::logic_error("System::pop_constraint: no constraint");
   std::unique_ptr<Term> t = std::move(constraints_.back());
   constraints_.pop_back();
+  term_symmetry_ = Symmetry{};
+  for (const auto* list : {&potentials_, &constraints_})
+    for (const auto& term : *list) term_symmetry_ = both(term_symmetry_, term->symmetry());
   return t;
 }
 
@@ -163,15 +176,8 @@ const Vec& System::lumped_mass() const {
 }
 
 Symmetry System::symmetry() const {
-  Symmetry s;
   if (!prescribed_.empty()) return {false, false};
-  for (const auto* list : {&potentials_, &constraints_})
-    for (const auto& term : *list) {
-      const Symmetry t = term->symmetry();
-      s.translation = s.translation && t.translation;
-      s.rotation = s.rotation && t.rotation;
-    }
-  return s;
+  return term_symmetry_;
 }
 
 void System::validate() const {

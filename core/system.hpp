@@ -121,6 +121,10 @@ class System {
   /// terms, and none of them if a dof is prescribed. (Loads are accounted for
   /// separately, through their work and moment.)
   Symmetry symmetry() const;
+  /// Those of all its terms alone (prescribed dofs and loads aside: where
+  /// the terms are invariant, the momenta balance the supports' and loads'
+  /// impulses). Kept as terms are added and removed.
+  Symmetry term_symmetry() const { return term_symmetry_; }
 
   /// Throws std::invalid_argument when the system cannot be integrated
   /// (a node without mass that is not marked massless, a term referring to
@@ -133,6 +137,7 @@ class System {
   std::vector<Eigen::Triplet<double, long>> node_mass_;
   std::vector<std::unique_ptr<Term>> potentials_;
   std::vector<std::unique_ptr<Term>> constraints_;
+  Symmetry term_symmetry_;  // of potentials_ and constraints_
   std::vector<PrescribedDof> prescribed_;
   std::vector<bool> is_prescribed_;
   std::vector<bool> is_massless_;

@@ -6,6 +6,8 @@
 #include <stdexcept>
 #include <string>
 
+#include "core/quantities.hpp"
+
 namespace emdae {
 
 // The multiplier unknowns are lambda / kappa, the constraint rows kappa Phi
@@ -45,8 +47,7 @@ StepProblem::StepProblem(const System& s, GradientKind kind, const State& start,
   kinetic0_ = 0.5 * v0_.dot(s_.mass() * v0_);
   // The angular momentum has a balance only where every term is invariant
   // under rotations (verify/recorder.cpp, conservation_of).
-  for (const auto* list : {&s_.potentials(), &s_.constraints()})
-    for (const auto& term : *list) angular_balance_ = angular_balance_ && term->symmetry().rotation;
+  angular_balance_ = s_.term_symmetry().rotation;
   for (const Term* term : extra) angular_balance_ = angular_balance_ && term->symmetry().rotation;
   penalty_ = Vec::Zero(m_);
   const int ms = s_.n_constraints();
@@ -547,24 +548,18 @@ double StepProblem::angular_residual(const Vec& x, const Vec& f) const {
   const int dim = s_.dim();
   if (dim != 2 && dim != 3) return 0.0;
   const Vec dq = x.head(n_) - q0_;
-  const Vec p = (s_.mass() * dq) / dt_;
   const Vec& m = s_.lumped_mass();
   const std::vector<bool>& prescribed = s_.is_prescribed();
-  Eigen::Vector3d moment = Eigen::Vector3d::Zero();
+  Vec r = Vec::Zero(n_);
+  for (int i = 0; i < n_; ++i)
+    if (!prescribed[static_cast<std::size_t>(i)] && m[i] > 0.0) r[i] = f[i];
+  Vec resultant, moment;
+  resultant_and_moment(dim, dq, r, resultant, moment);  // sum_A dq_A x r_A
+  const Vec p = (s_.mass() * dq) / dt_;
   double scale = 0.0;
-  for (int a = 0; (a + 1) * dim <= n_; ++a) {
-    Eigen::Vector3d r = Eigen::Vector3d::Zero(), d = r, mid = r, pa = r;
-    for (int k = 0; k < dim; ++k) {
-      const int i = a * dim + k;
-      const auto iu = static_cast<std::size_t>(i);
-      if (!prescribed[iu] && m[i] > 0.0) r[k] = f[i];
-      d[k] = dq[i];
-      mid[k] = q0_[i] + 0.5 * dq[i];
-      pa[k] = p[i];
-    }
-    moment += r.cross(d);
-    scale += mid.norm() * pa.norm();
-  }
+  for (int a = 0; (a + 1) * dim <= n_; ++a)
+    scale += (q0_.segment(a * dim, dim) + 0.5 * dq.segment(a * dim, dim)).norm() *
+             p.segment(a * dim, dim).norm();
   return scale > 0.0 ? 0.5 * dt_ * moment.norm() / scale : 0.0;
 }
 
