@@ -32,6 +32,7 @@ void Assembler::scatter_matrix(const Term& term, const Mat& k, double factor, Tr
 void Assembler::add_potential_forces(GradientKind kind, const Vec& q0, const Vec& q1, double t0,
                                      double t1, Vec& f, Triplets* jac, double jac_factor) {
   for (const auto& term : s_.potentials()) {
+    if (!jac && term->add_fixed(kind, q0, q1, t0, t1, f.data(), nullptr, nullptr, 0.0)) continue;
     local(*term, kind, q0, q1, t0, t1, jac ? &jac_ : nullptr);
     const auto& dofs = term->dofs();
     for (std::size_t i = 0; i < dofs.size(); ++i) f[dofs[i]] += grad_[static_cast<Eigen::Index>(i)];
@@ -44,10 +45,14 @@ void Assembler::add_potential_jacobian(GradientKind kind, const Vec& q0, const V
                                        double jac_factor) {
   std::size_t next = 0;
   for (const auto& term : s_.potentials()) {
-    local(*term, kind, q0, q1, t0, t1, &jac_);
     const std::size_t n = term->dofs().size();
-    const double* k = jac_.data();  // column-major, as the slots
     const long* slot = slots.data() + next;
+    if (term->add_fixed(kind, q0, q1, t0, t1, nullptr, values, slot, jac_factor)) {
+      next += n * n;
+      continue;
+    }
+    local(*term, kind, q0, q1, t0, t1, &jac_);
+    const double* k = jac_.data();  // column-major, as the slots
     for (std::size_t e = 0; e < n * n; ++e)
       if (slot[e] >= 0) values[slot[e]] += jac_factor * k[e];
     next += n * n;

@@ -217,25 +217,25 @@ Eigen::Vector3d Q1Element::point_invariants(const Eigen::Matrix2d& f) const {
   return {f.col(0).squaredNorm(), f.col(1).squaredNorm(), f.col(0).dot(f.col(1))};
 }
 
-Q1Element::Mat38 Q1Element::point_jacobian(const Eigen::Matrix2d& f, int g) const {
+Q1Element::Mat83 Q1Element::point_jacobian_t(const Eigen::Matrix2d& f, int g) const {
   const auto& dn = gp_[static_cast<std::size_t>(g)].dn;
-  Mat38 d;
+  Mat83 d;
   if (material_.small_strain()) {
     for (int a = 0; a < 4; ++a) {
-      d(0, 2 * a) = dn(a, 0);
-      d(0, 2 * a + 1) = 0.0;
-      d(1, 2 * a) = 0.0;
-      d(1, 2 * a + 1) = dn(a, 1);
-      d(2, 2 * a) = dn(a, 1);
-      d(2, 2 * a + 1) = dn(a, 0);
+      d(2 * a, 0) = dn(a, 0);
+      d(2 * a + 1, 0) = 0.0;
+      d(2 * a, 1) = 0.0;
+      d(2 * a + 1, 1) = dn(a, 1);
+      d(2 * a, 2) = dn(a, 1);
+      d(2 * a + 1, 2) = dn(a, 0);
     }
     return d;
   }
   for (int a = 0; a < 4; ++a)
     for (int i = 0; i < 2; ++i) {
-      d(0, 2 * a + i) = 2.0 * f(i, 0) * dn(a, 0);
-      d(1, 2 * a + i) = 2.0 * f(i, 1) * dn(a, 1);
-      d(2, 2 * a + i) = dn(a, 0) * f(i, 1) + f(i, 0) * dn(a, 1);
+      d(2 * a + i, 0) = 2.0 * f(i, 0) * dn(a, 0);
+      d(2 * a + i, 1) = 2.0 * f(i, 1) * dn(a, 1);
+      d(2 * a + i, 2) = dn(a, 0) * f(i, 1) + f(i, 0) * dn(a, 1);
     }
   return d;
 }
@@ -260,12 +260,12 @@ void Q1Element::exact_kernel(const Vec8& q, double jac_scale, Vec8& grad, Mat8* 
     const double w = gp_[static_cast<std::size_t>(g)].weight;
     const Eigen::Matrix2d f = point_f(q, g);
     const Eigen::Vector3d pi = point_invariants(f);
-    const Mat38 d = point_jacobian(f, g);
+    const Mat83 dt = point_jacobian_t(f, g);
     const Eigen::Vector3d gv = w * material_.energy_gradient(pi);
-    grad.noalias() += d.transpose() * gv;
+    grad.noalias() += dt * gv;
     if (!jac) continue;
-    const Mat38 hd = (w * material_.energy_hessian(pi)) * d;
-    jac->noalias() += d.transpose() * hd;
+    const Mat83 hdt = dt * (w * material_.energy_hessian(pi)).transpose();
+    jac->noalias() += dt * hdt.transpose();
     add_point_hessian(g, gv, *jac);
   }
   if (jac) *jac *= jac_scale;
@@ -281,9 +281,10 @@ void Q1Element::discrete_kernel(const Vec8& q0, const Vec8& q1, Vec8& grad, Mat8
     const Eigen::Matrix2d f0 = point_f(q0, g), f1 = point_f(q1, g);
     const Eigen::Vector3d pi0 = point_invariants(f0), pi1 = point_invariants(f1);
     const Eigen::Vector3d pim = 0.5 * (pi0 + pi1), dpi = pi1 - pi0;
-    const Mat38 d_mid = point_jacobian(point_f(q_mid, g), g);
+    const Mat83 dt_mid = point_jacobian_t(point_f(q_mid, g), g);
     const Eigen::Vector3d gm = w * material_.energy_gradient(pim);
-    Eigen::Matrix3d hm, bj;
+    // The block Jacobian of the discrete gradient (only with jac).
+    Eigen::Matrix3d hm = Eigen::Matrix3d::Zero(), bj = Eigen::Matrix3d::Zero();
     if (jac) {
       hm = w * material_.energy_hessian(pim);
       bj = 0.5 * hm;
@@ -322,34 +323,58 @@ void Q1Element::discrete_kernel(const Vec8& q0, const Vec8& q1, Vec8& grad, Mat8
         }
       }
     }
-    grad.noalias() += d_mid.transpose() * gt;
+    grad.noalias() += dt_mid * gt;
     if (!jac) continue;
-    const Mat38 bd = bj * point_jacobian(f1, g);
-    jac->noalias() += d_mid.transpose() * bd;
+    const Mat83 bdt = point_jacobian_t(f1, g) * bj.transpose();
+    jac->noalias() += dt_mid * bdt.transpose();
     add_point_hessian(g, 0.5 * gt, *jac);
+  }
+}
+
+void Q1Element::kernel(GradientKind kind, const Vec8& q0, const Vec8& q1, Vec8& grad,
+                       Mat8* jac) const {
+  switch (kind) {
+    case GradientKind::Exact:
+      exact_kernel(q1, 1.0, grad, jac);
+      break;
+    case GradientKind::Midpoint:
+      exact_kernel(0.5 * (q0 + q1), 0.5, grad, jac);
+      break;
+    case GradientKind::Discrete:
+      discrete_kernel(q0, q1, grad, jac);
+      break;
   }
 }
 
 bool Q1Element::fixed_gradient(GradientKind kind, const Vec& q0, const Vec& q1, double, double,
                                Vec& grad, Mat* jac) const {
   if (q0.size() != 8 || q1.size() != 8) return false;
-  const Eigen::Map<const Vec8> a(q0.data()), b(q1.data());
   Vec8 g;
   Mat8 k;
-  Mat8* kp = jac ? &k : nullptr;
-  switch (kind) {
-    case GradientKind::Exact:
-      exact_kernel(b, 1.0, g, kp);
-      break;
-    case GradientKind::Midpoint:
-      exact_kernel(0.5 * (a + b), 0.5, g, kp);
-      break;
-    case GradientKind::Discrete:
-      discrete_kernel(a, b, g, kp);
-      break;
-  }
+  kernel(kind, Eigen::Map<const Vec8>(q0.data()), Eigen::Map<const Vec8>(q1.data()), g,
+         jac ? &k : nullptr);
   grad = g;
   if (jac) *jac = k;
+  return true;
+}
+
+bool Q1Element::add_fixed(GradientKind kind, const Vec& q0, const Vec& q1, double, double,
+                          double* f, double* values, const long* slots, double jac_factor) const {
+  const auto& d = dofs();
+  Vec8 a, b, g;
+  for (int i = 0; i < 8; ++i) {
+    a[i] = q0[d[static_cast<std::size_t>(i)]];
+    b[i] = q1[d[static_cast<std::size_t>(i)]];
+  }
+  Mat8 k;
+  kernel(kind, a, b, g, values ? &k : nullptr);
+  if (f)
+    for (int i = 0; i < 8; ++i) f[d[static_cast<std::size_t>(i)]] += g[i];
+  if (values) {
+    const double* e = k.data();  // column-major, as the slots
+    for (int i = 0; i < 64; ++i)
+      if (slots[i] >= 0) values[slots[i]] += jac_factor * e[i];
+  }
   return true;
 }
 

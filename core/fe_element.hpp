@@ -71,6 +71,8 @@ class Q1Element final : public Term {
   /// matrices of fixed size, Gauss point by Gauss point, no allocation.
   bool fixed_gradient(GradientKind kind, const Vec& q0, const Vec& q1, double t0, double t1,
                       Vec& grad, Mat* jac) const override;
+  bool add_fixed(GradientKind kind, const Vec& q0, const Vec& q1, double t0, double t1, double* f,
+                 double* values, const long* slots, double jac_factor) const override;
   std::string describe() const override;
 
   const Material& material() const { return material_; }
@@ -93,14 +95,21 @@ class Q1Element final : public Term {
   using Vec8 = Eigen::Matrix<double, 8, 1>;
   using Mat8 = Eigen::Matrix<double, 8, 8>;
   using Mat38 = Eigen::Matrix<double, 3, 8>;
-  // F, pi and Dpi of Gauss point g (fixed sizes).
-  Eigen::Matrix2d point_f(const Vec8& q, int g) const;
-  Eigen::Vector3d point_invariants(const Eigen::Matrix2d& f) const;
-  Mat38 point_jacobian(const Eigen::Matrix2d& f, int g) const;
+  using Mat83 = Eigen::Matrix<double, 8, 3>;
+  // F, pi and Dpi of Gauss point g (fixed sizes). Always inlined: they are
+  // the kernels' inner loop, and a call each costs as much as their work.
+  [[gnu::always_inline]] inline Eigen::Matrix2d point_f(const Vec8& q, int g) const;
+  [[gnu::always_inline]] inline Eigen::Vector3d point_invariants(const Eigen::Matrix2d& f) const;
+  // Dpi transposed (8 x 3): its columns are contiguous, so the products
+  // Dpi^T X vectorize over the 8 rows.
+  [[gnu::always_inline]] inline Mat83 point_jacobian_t(const Eigen::Matrix2d& f, int g) const;
   // k += sum_k w_k A_k of Gauss point g.
-  void add_point_hessian(int g, const Eigen::Vector3d& w, Mat8& k) const;
+  [[gnu::always_inline]] inline void add_point_hessian(int g, const Eigen::Vector3d& w,
+                                                       Mat8& k) const;
   void exact_kernel(const Vec8& q, double jac_scale, Vec8& grad, Mat8* jac) const;
   void discrete_kernel(const Vec8& q0, const Vec8& q1, Vec8& grad, Mat8* jac) const;
+  // The kernel of `kind` on local positions (fixed_gradient, add_fixed).
+  void kernel(GradientKind kind, const Vec8& q0, const Vec8& q1, Vec8& grad, Mat8* jac) const;
 
   std::array<GaussPoint, kGaussPoints> gp_;
   Material material_;

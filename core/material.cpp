@@ -92,34 +92,13 @@ double Material::energy(const Eigen::Vector3d& pi) const {
   return 0.5 * mu * (pi[0] + pi[1] - 2.0) - mu * log_j + 0.5 * lambda * log_j * log_j;
 }
 
-Eigen::Vector3d Material::energy_gradient(const Eigen::Vector3d& pi) const {
-  if (model == MaterialModel::Linear) {
-    const double a = lambda * (pi[0] + pi[1]);
-    return {a + 2.0 * mu * pi[0], a + 2.0 * mu * pi[1], mu * pi[2]};  // sigma11, sigma22, sigma12
-  }
-  if (model == MaterialModel::SaintVenantKirchhoff) {
-    const double a = lambda / 4.0 * (pi[0] + pi[1] - 2.0);
-    return {a + mu / 2.0 * (pi[0] - 1.0), a + mu / 2.0 * (pi[1] - 1.0), mu * pi[2]};
-  }
+Eigen::Vector3d Material::neo_hooke_gradient(const Eigen::Vector3d& pi) const {
   const LogJ l(pi);
   if (!(l.d > 0.0)) return Eigen::Vector3d::Constant(std::numeric_limits<double>::quiet_NaN());
   return Eigen::Vector3d(0.5 * mu, 0.5 * mu, 0.0) + (lambda * l.log_j - mu) * l.grad;
 }
 
-Eigen::Matrix3d Material::energy_hessian(const Eigen::Vector3d& pi) const {
-  Eigen::Matrix3d h = Eigen::Matrix3d::Zero();
-  if (model == MaterialModel::Linear) {
-    h(0, 0) = h(1, 1) = lambda + 2.0 * mu;
-    h(0, 1) = h(1, 0) = lambda;
-    h(2, 2) = mu;
-    return h;
-  }
-  if (model == MaterialModel::SaintVenantKirchhoff) {
-    h(0, 0) = h(1, 1) = lambda / 4.0 + mu / 2.0;
-    h(0, 1) = h(1, 0) = lambda / 4.0;
-    h(2, 2) = mu;
-    return h;
-  }
+Eigen::Matrix3d Material::neo_hooke_hessian(const Eigen::Vector3d& pi) const {
   const LogJ l(pi);
   if (!(l.d > 0.0)) return Eigen::Matrix3d::Constant(std::numeric_limits<double>::quiet_NaN());
   Eigen::Matrix3d d2d = Eigen::Matrix3d::Zero();
@@ -127,8 +106,7 @@ Eigen::Matrix3d Material::energy_hessian(const Eigen::Vector3d& pi) const {
   d2d(2, 2) = -2.0;
   // d2L = 1/2 D2d/d - 2 dL dL^T   (since dd/dpi = 2 d dL/dpi)
   const Eigen::Matrix3d d2l = (0.5 / l.d) * d2d - 2.0 * l.grad * l.grad.transpose();
-  h = lambda * l.grad * l.grad.transpose() + (lambda * l.log_j - mu) * d2l;
-  return h;
+  return lambda * l.grad * l.grad.transpose() + (lambda * l.log_j - mu) * d2l;
 }
 
 Eigen::Matrix2d Material::second_piola_kirchhoff(const Eigen::Vector3d& pi) const {

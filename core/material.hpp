@@ -70,6 +70,9 @@ struct Material {
   Eigen::Vector3d energy_gradient(const Eigen::Vector3d& pi) const;
   /// d^2 W / dpi^2.
   Eigen::Matrix3d energy_hessian(const Eigen::Vector3d& pi) const;
+  /// Neo-Hooke's dW/dpi and d^2 W / dpi^2 (the two above, out of line).
+  Eigen::Vector3d neo_hooke_gradient(const Eigen::Vector3d& pi) const;
+  Eigen::Matrix3d neo_hooke_hessian(const Eigen::Vector3d& pi) const;
   /// Second Piola-Kirchhoff stress S = 2 DW(C) as a symmetric 2x2 matrix
   /// (linear: the small-strain stress sigma = DW(eps)).
   Eigen::Matrix2d second_piola_kirchhoff(const Eigen::Vector3d& pi) const;
@@ -88,5 +91,33 @@ struct Material {
 /// std::invalid_argument naming the offending value; the caller adds where
 /// it came from (body, key).
 Material make_material(MaterialModel model, double young, double poisson, double density);
+
+// The quadratic materials' gradient and Hessian inline: the element kernels
+// call them at every Gauss point (core/fe_element.cpp).
+inline Eigen::Vector3d Material::energy_gradient(const Eigen::Vector3d& pi) const {
+  if (model == MaterialModel::Linear) {
+    const double a = lambda * (pi[0] + pi[1]);
+    return {a + 2.0 * mu * pi[0], a + 2.0 * mu * pi[1], mu * pi[2]};  // sigma11, sigma22, sigma12
+  }
+  if (model == MaterialModel::SaintVenantKirchhoff) {
+    const double a = lambda / 4.0 * (pi[0] + pi[1] - 2.0);
+    return {a + mu / 2.0 * (pi[0] - 1.0), a + mu / 2.0 * (pi[1] - 1.0), mu * pi[2]};
+  }
+  return neo_hooke_gradient(pi);
+}
+
+inline Eigen::Matrix3d Material::energy_hessian(const Eigen::Vector3d& pi) const {
+  if (model == MaterialModel::NeoHooke) return neo_hooke_hessian(pi);
+  Eigen::Matrix3d h = Eigen::Matrix3d::Zero();
+  if (model == MaterialModel::Linear) {
+    h(0, 0) = h(1, 1) = lambda + 2.0 * mu;
+    h(0, 1) = h(1, 0) = lambda;
+  } else {
+    h(0, 0) = h(1, 1) = lambda / 4.0 + mu / 2.0;
+    h(0, 1) = h(1, 0) = lambda / 4.0;
+  }
+  h(2, 2) = mu;
+  return h;
+}
 
 }  // namespace emdae

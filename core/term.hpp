@@ -101,6 +101,18 @@ class Term {
                               double /*t0*/, double /*t1*/, Vec& /*grad*/, Mat* /*jac*/) const {
     return false;
   }
+  /// The same kernel straight from and into the global arrays, for the
+  /// assembly of a whole system (core/assembly.cpp): the term's positions
+  /// read from the global q0, q1 by its dofs; with `f`, its gradient added
+  /// to f's rows at its dofs; with `values`, jac_factor times its Jacobian
+  /// added to values[slots[e]] for the n_local^2 entries e (column-major;
+  /// slot -1: not stored). Returns false (the default) when the term has no
+  /// such path; the assembler then gathers and calls term_gradient().
+  virtual bool add_fixed(GradientKind /*kind*/, const Vec& /*q0*/, const Vec& /*q1*/, double /*t0*/,
+                         double /*t1*/, double* /*f*/, double* /*values*/, const long* /*slots*/,
+                         double /*jac_factor*/) const {
+    return false;
+  }
   /// True when f depends on time explicitly (driven constraints, loads).
   virtual bool depends_on_time() const { return false; }
 
