@@ -308,9 +308,9 @@ void Q1Element::discrete_kernel(const Vec8& q0, const Vec8& q1, Vec8& grad, Mat8
           double numerator = 0.0;
           for (int k = 0; k < 3; ++k) {
             const double r = 0.25 * (1.0 + kX[k]);
-            const Eigen::Matrix3d dh = w * material_.energy_hessian(pim + r * dpi) -
-                                       w * material_.energy_hessian(pim - r * dpi);
-            numerator += 0.25 * kW[k] * (0.5 - r) * dpi.dot(dh * dpi);
+            const double dh = material_.energy_curvature(pim + r * dpi, dpi) -
+                              material_.energy_curvature(pim - r * dpi, dpi);
+            numerator += 0.25 * kW[k] * (0.5 - r) * w * dh;
           }
           c = numerator / d2;
         }

@@ -109,6 +109,17 @@ Eigen::Matrix3d Material::neo_hooke_hessian(const Eigen::Vector3d& pi) const {
   return lambda * l.grad * l.grad.transpose() + (lambda * l.log_j - mu) * d2l;
 }
 
+// With s = grad L . v and v^T D2d v = 2 v1 v2 - 2 v3^2 (d = pi1 pi2 - pi3^2),
+// v^T H v = lambda s^2 + (lambda L - mu) (1/2 v^T D2d v / d - 2 s^2): the
+// Hessian's formula above applied to v on both sides.
+double Material::neo_hooke_curvature(const Eigen::Vector3d& pi, const Eigen::Vector3d& v) const {
+  const LogJ l(pi);
+  if (!(l.d > 0.0)) return std::numeric_limits<double>::quiet_NaN();
+  const double s = l.grad.dot(v);
+  const double vdv = 2.0 * v[0] * v[1] - 2.0 * v[2] * v[2];
+  return lambda * s * s + (lambda * l.log_j - mu) * ((0.5 / l.d) * vdv - 2.0 * s * s);
+}
+
 Eigen::Matrix2d Material::second_piola_kirchhoff(const Eigen::Vector3d& pi) const {
   const Eigen::Vector3d g = energy_gradient(pi);
   Eigen::Matrix2d s;

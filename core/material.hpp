@@ -70,9 +70,15 @@ struct Material {
   Eigen::Vector3d energy_gradient(const Eigen::Vector3d& pi) const;
   /// d^2 W / dpi^2.
   Eigen::Matrix3d energy_hessian(const Eigen::Vector3d& pi) const;
-  /// Neo-Hooke's dW/dpi and d^2 W / dpi^2 (the two above, out of line).
+  /// v^T (d^2 W / dpi^2) v, without forming the Hessian (the discrete
+  /// gradient's quadrature, core/fe_element.cpp). NaN where det C <= 0 for
+  /// Neo-Hooke, as the Hessian.
+  double energy_curvature(const Eigen::Vector3d& pi, const Eigen::Vector3d& v) const;
+  /// Neo-Hooke's dW/dpi, d^2 W / dpi^2 and curvature (the three above, out
+  /// of line).
   Eigen::Vector3d neo_hooke_gradient(const Eigen::Vector3d& pi) const;
   Eigen::Matrix3d neo_hooke_hessian(const Eigen::Vector3d& pi) const;
+  double neo_hooke_curvature(const Eigen::Vector3d& pi, const Eigen::Vector3d& v) const;
   /// Second Piola-Kirchhoff stress S = 2 DW(C) as a symmetric 2x2 matrix
   /// (linear: the small-strain stress sigma = DW(eps)).
   Eigen::Matrix2d second_piola_kirchhoff(const Eigen::Vector3d& pi) const;
@@ -118,6 +124,12 @@ inline Eigen::Matrix3d Material::energy_hessian(const Eigen::Vector3d& pi) const
   }
   h(2, 2) = mu;
   return h;
+}
+
+inline double Material::energy_curvature(const Eigen::Vector3d& pi,
+                                         const Eigen::Vector3d& v) const {
+  if (model == MaterialModel::NeoHooke) return neo_hooke_curvature(pi, v);
+  return v.dot(energy_hessian(pi) * v);
 }
 
 }  // namespace emdae

@@ -159,6 +159,10 @@ TEST(Material, DerivativesMatchFiniteDifferencesAndTextbookStress) {
       EXPECT_LE((g - g_fd).cwiseAbs().maxCoeff(), 1e-7 * g.cwiseAbs().maxCoeff()) << mat.describe();
       EXPECT_LE((h - h_fd).cwiseAbs().maxCoeff(), 1e-7 * h.cwiseAbs().maxCoeff()) << mat.describe();
       EXPECT_LE(max_abs(h - h.transpose()), 1e-12 * max_abs(h));
+      // The curvature along a direction, without the Hessian: v^T H v.
+      const Eigen::Vector3d v(u(rng), u(rng), u(rng));
+      EXPECT_NEAR(mat.energy_curvature(pi, v), v.dot(h * v), 1e-13 * max_abs(h) * v.squaredNorm())
+          << mat.describe();
       const Eigen::Matrix2d s = textbook_stress(mat, f);
       EXPECT_LE(max_abs(mat.second_piola_kirchhoff(pi) - s), 1e-12 * max_abs(s)) << mat.describe();
     }
