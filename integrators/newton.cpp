@@ -305,6 +305,23 @@ NewtonResult NewtonSolver::solve(NewtonProblem& problem, Vec& x, const Vec& resi
   return r;
 }
 
+bool NewtonSolver::guess_meets_tolerance(NewtonProblem& problem, const Vec& x,
+                                         const Vec& residual_scale) {
+  Vec f;
+  problem.residual(x, f);
+  if (f.size() != x.size() || residual_scale.size() != x.size()) return false;
+  const double residual = (f.array() * residual_scale.array()).abs().maxCoeff();
+  if (!(residual <= settings_.tolerance)) return false;
+  if (settings_.energy_tolerance > 0 &&
+      !(problem.energy_residual(x, f) <= settings_.energy_tolerance))
+    return false;
+  if (settings_.angular_tolerance > 0 &&
+      !(problem.angular_residual(x, f) <= settings_.angular_tolerance))
+    return false;
+  impl_->factored_last_solve = false;
+  return true;
+}
+
 bool NewtonSolver::solve_with_last_jacobian(const Vec& b, Vec& d) {
   Impl& m = *impl_;
   if (!m.factored_last_solve || !m.klu || b.size() != m.n) return false;

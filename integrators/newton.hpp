@@ -96,6 +96,11 @@ class NewtonSolver {
   /// Exceptions thrown by the problem's callbacks are rethrown here, after
   /// KINSOL has returned (they never cross the C library).
   NewtonResult solve(NewtonProblem& problem, Vec& x, const Vec& residual_scale);
+  /// The residual at x, if it meets the tolerance (max_i |s_i F_i|) and the
+  /// energy and angular balances: x is accepted as the solution without an
+  /// iteration (KINSOL accepts a guess only within 0.01 of the tolerance).
+  /// Then solve_with_last_jacobian() has no Jacobian for it.
+  bool guess_meets_tolerance(NewtonProblem& problem, const Vec& x, const Vec& residual_scale);
 
   /// d = J^-1 b with the factorization of the last solve's last Jacobian
   /// (for the sensitivity of its solution to a parameter). False if that
