@@ -94,7 +94,6 @@ class Q1Element final : public Term {
   };
   using Vec8 = Eigen::Matrix<double, 8, 1>;
   using Mat8 = Eigen::Matrix<double, 8, 8>;
-  using Mat38 = Eigen::Matrix<double, 3, 8>;
   using Mat83 = Eigen::Matrix<double, 8, 3>;
   // F, pi and Dpi of Gauss point g (fixed sizes). Always inlined: they are
   // the kernels' inner loop, and a call each costs as much as their work.

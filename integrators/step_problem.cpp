@@ -139,6 +139,14 @@ double StepProblem::load_time() const {
 void StepProblem::residual(const Vec& x, Vec& f) {
   const Vec q1 = x.head(n_);
   const Vec lambda = kappa_ * x.tail(m_);
+  // The same point again (Newton's first residual after a guess was
+  // tried, NewtonSolver::guess_meets_tolerance): everything the residual
+  // sets is as it was left there.
+  if (res_f_.size() == size() && q1 == res_q1_ && lambda == res_lambda_) {
+    f = res_f_;
+    return;
+  }
+  res_f_.resize(0);  // until this evaluation completes
   f.resize(size());
   // The forces F (and loads f) are kept with the point they were evaluated
   // at: the velocity update after the solve needs them at the solution,
@@ -177,6 +185,7 @@ void StepProblem::residual(const Vec& x, Vec& f) {
   }
   for (const auto& p : s_.prescribed())
     f[p.dof] = kappa_ * (q1[p.dof] - (p.position ? p.position(t1_) : q0_[p.dof]));
+  res_f_ = f;
 }
 
 void StepProblem::penalty_laws(const Vec& q1, Vec& d, Vec& slope) const {

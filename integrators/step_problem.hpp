@@ -142,6 +142,7 @@ class StepProblem final : public NewtonProblem {
   bool angular_balance_ = true;  // every term invariant under rotations
   Vec phi_, force_;
   Vec res_q1_, res_lambda_, res_force_, res_load_;  // the last residual's point and forces
+  Vec res_f_;  // and the residual itself (a second call at that point copies it)
   Triplets trip_;
   JacobianPattern own_pattern_;
   JacobianPattern* pattern_;
