@@ -24,6 +24,18 @@ using sundials::check_ptr;
 // A scaled Newton step this small is at the round-off level of O(1) unknowns.
 constexpr double kRoundOffStep = 1e-15;
 
+// max_i |s_i F_i|: the residual the tolerance bounds.
+double scaled_max(const Vec& f, const Vec& scale) {
+  return (f.array() * scale.array()).abs().maxCoeff();
+}
+
+// Whether the residual f at x leaves no more energy and angular momentum in
+// the step than the tolerances allow (a tolerance <= 0: not asked).
+bool balanced(const NewtonSettings& s, const NewtonProblem& problem, const Vec& x, const Vec& f) {
+  return (s.energy_tolerance <= 0 || problem.energy_residual(x, f) <= s.energy_tolerance) &&
+         (s.angular_tolerance <= 0 || problem.angular_residual(x, f) <= s.angular_tolerance);
+}
+
 }  // namespace
 
 struct NewtonSolver::Impl {
@@ -155,7 +167,7 @@ struct NewtonSolver::Impl {
       self->problem->residual(self->x, self->f);
       if (!self->f.allFinite()) return 1;  // recoverable: KINSOL may back off
       Eigen::Map<Vec>(N_VGetArrayPointer(fval), len) = self->f;
-      self->last_residual = (self->f.array() * self->scale.array()).abs().maxCoeff();
+      self->last_residual = scaled_max(self->f, self->scale);
       return 0;
     } catch (...) {
       self->error = std::current_exception();
@@ -237,12 +249,6 @@ NewtonResult NewtonSolver::solve(NewtonProblem& problem, Vec& x, const Vec& resi
   // has not converged: the step is cut back like any failed solve. (It was
   // accepted with what the residual left: 1.2e-9 of the energy in sweep
   // case 170 with the distance fade.)
-  const auto balanced = [&](const Vec& xu) {
-    return (settings_.energy_tolerance <= 0 ||
-            problem.energy_residual(xu, m.f) <= settings_.energy_tolerance) &&
-           (settings_.angular_tolerance <= 0 ||
-            problem.angular_residual(xu, m.f) <= settings_.angular_tolerance);
-  };
   bool unbalanced = false;
   if ((flag == KIN_SUCCESS || flag == KIN_INITIAL_GUESS_OK) &&
       (settings_.energy_tolerance > 0 || settings_.angular_tolerance > 0)) {
@@ -250,12 +256,12 @@ NewtonResult NewtonSolver::solve(NewtonProblem& problem, Vec& x, const Vec& resi
     while (true) {
       const Vec xu = Eigen::Map<const Vec>(N_VGetArrayPointer(m.u.get()), n);
       if (xu != m.x) problem.residual(xu, m.f);  // the last evaluation was elsewhere
-      if (balanced(xu)) break;
+      if (balanced(settings_, problem, xu, m.f)) break;
       if (iters + extra >= settings_.max_iterations) {
         unbalanced = true;
         break;
       }
-      const double residual_before = (m.f.array() * m.scale.array()).abs().maxCoeff();
+      const double residual_before = scaled_max(m.f, m.scale);
       check(KINSetFuncNormTol(m.kin.get(), 1e-300), "KINSetFuncNormTol");
       check(KINSetNumMaxIters(m.kin.get(), 1), "KINSetNumMaxIters");
       const int more = KINSol(m.kin.get(), m.u.get(), strategy, m.uscale.get(), m.fscale.get());
@@ -310,13 +316,8 @@ bool NewtonSolver::guess_meets_tolerance(NewtonProblem& problem, const Vec& x,
   Vec f;
   problem.residual(x, f);
   if (f.size() != x.size() || residual_scale.size() != x.size()) return false;
-  const double residual = (f.array() * residual_scale.array()).abs().maxCoeff();
-  if (!(residual <= settings_.tolerance)) return false;
-  if (settings_.energy_tolerance > 0 &&
-      !(problem.energy_residual(x, f) <= settings_.energy_tolerance))
-    return false;
-  if (settings_.angular_tolerance > 0 &&
-      !(problem.angular_residual(x, f) <= settings_.angular_tolerance))
+  if (!(scaled_max(f, residual_scale) <= settings_.tolerance) ||
+      !balanced(settings_, problem, x, f))
     return false;
   impl_->factored_last_solve = false;
   return true;

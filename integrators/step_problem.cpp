@@ -142,7 +142,7 @@ void StepProblem::residual(const Vec& x, Vec& f) {
   // The same point again (Newton's first residual after a guess was
   // tried, NewtonSolver::guess_meets_tolerance): everything the residual
   // sets is as it was left there.
-  if (res_f_.size() == size() && q1 == res_q1_ && lambda == res_lambda_) {
+  if (res_f_.size() == size() && at_last_residual(q1, lambda)) {
     f = res_f_;
     return;
   }
@@ -274,8 +274,7 @@ void StepProblem::jacobian(const Vec& x, SparseMatrix& j) {
 }
 
 void StepProblem::forces(const Vec& q1, const Vec& lambda, Vec& force, Vec& load) {
-  if (q1.size() == res_q1_.size() && lambda.size() == res_lambda_.size() && q1 == res_q1_ &&
-      lambda == res_lambda_) {
+  if (at_last_residual(q1, lambda)) {
     force = res_force_;  // the last residual's, at this very point
     load = res_load_;
     return;

@@ -143,6 +143,11 @@ class StepProblem final : public NewtonProblem {
   Vec phi_, force_;
   Vec res_q1_, res_lambda_, res_force_, res_load_;  // the last residual's point and forces
   Vec res_f_;  // and the residual itself (a second call at that point copies it)
+  /// Whether (q1, lambda) is the last residual's point.
+  bool at_last_residual(const Vec& q1, const Vec& lambda) const {
+    return q1.size() == res_q1_.size() && lambda.size() == res_lambda_.size() && q1 == res_q1_ &&
+           lambda == res_lambda_;
+  }
   Triplets trip_;
   JacobianPattern own_pattern_;
   JacobianPattern* pattern_;
