@@ -60,6 +60,8 @@ class MidpointFamilyStepper : public Stepper, public SubstepScheme {
   bool last_resort() override { return contact_.keep_deep_entries(); }
 
   KluSolver::Counters klu_counters() const { return newton_.klu_counters(); }
+  /// The chord steps its Newton solves started with (NewtonSolver::solve).
+  long chord_steps() const { return newton_.chord_steps(); }
   KluSolver::Counters linear_solver_counters() const override { return klu_counters(); }
   const ImpactCounters& impact_counters() const { return contact_.counters(); }
   const MassInverse& mass_inverse() const { return m_ff_; }
@@ -96,6 +98,14 @@ class MidpointFamilyStepper : public Stepper, public SubstepScheme {
     double h = 0.0;
     Vec targets, x;
   } last_;
+  // The structure of the last Newton solve, whose last Jacobian the
+  // solver keeps factored: the active contacts and the step length (see
+  // NewtonSolver::solve's same_structure).
+  struct Factored {
+    bool valid = false;
+    std::vector<int> active;
+    double h = 0.0;
+  } factored_;
 };
 
 }  // namespace emdae

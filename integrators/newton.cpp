@@ -120,6 +120,56 @@ struct NewtonSolver::Impl {
   long window_solves = 0, window_jacobians = 0, newton_left = 0;
   long jacobian_evaluations = 0;  // by jacobian_cb, over all solves
   bool factored_last_solve = false;
+  long chord_steps = 0;
+  // Where chord steps do not cut the residual (a spinning body, whose
+  // Jacobian turns with it from step to step), a rejected trial costs a
+  // residual and a solve for nothing: after one, the next chord_backoff
+  // solves start without, and that number doubles with each rejection in a
+  // row, up to kMaxChordBackoff; a kept one resets it. Counts only: a run
+  // is reproducible.
+  static constexpr int kMaxChordBackoff = 64;
+  int chord_backoff = 1, chord_skip = 0;
+  // Whether the chord steps pay is measured, as for jacobian_reuse = auto:
+  // over windows of kChordWindow solves that could start with one, the
+  // fresh Jacobians per solve with chord steps and without. A chord step
+  // can cut the residual a hundredfold and save nothing, where Newton's
+  // first iteration would have gone on to converge in as many set-ups (the
+  // 6 x 6 spinning block: 2 a step either way, the second taken by the
+  // energy test). The first window takes chord steps, the second none; then
+  // the better of the two runs kChordRun windows and the other is measured
+  // again for one. Chord steps are taken where they save at least
+  // kChordSaving Jacobians a solve. Counts only: a run is reproducible.
+  static constexpr int kChordWindow = 16, kChordRun = 16;
+  static constexpr double kChordSaving = 0.3;
+  bool chord_window = true;     // this window takes chord steps
+  bool chord_better = true;     // the last measurements' verdict
+  bool chord_measuring = true;  // this window measures, or runs the better
+  int chord_windows_left = 1;
+  long window_eligible = 0, window_jacobians_count = 0;
+  double jacobians_with_chord = -1.0, jacobians_without = -1.0;  // per solve, last measured
+
+  // After an eligible solve that took `jacobians` fresh Jacobians.
+  void watch_chords(long jacobians) {
+    ++window_eligible;
+    window_jacobians_count += jacobians;
+    if (window_eligible < kChordWindow) return;
+    const double per_solve = double(window_jacobians_count) / double(window_eligible);
+    (chord_window ? jacobians_with_chord : jacobians_without) = per_solve;
+    window_eligible = window_jacobians_count = 0;
+    if (jacobians_with_chord >= 0 && jacobians_without >= 0)
+      chord_better = jacobians_with_chord <= jacobians_without - kChordSaving;
+    if (--chord_windows_left > 0) return;
+    const bool other_measured = (chord_window ? jacobians_without : jacobians_with_chord) >= 0;
+    if (!chord_measuring || !other_measured) {  // the other way for one window
+      chord_measuring = true;
+      chord_window = !chord_window;
+      chord_windows_left = 1;
+    } else {  // both measured: the better for a run
+      chord_measuring = false;
+      chord_window = chord_better;
+      chord_windows_left = kChordRun;
+    }
+  }
 
   int auto_reuse(const NewtonSettings& s) {
     if (klu->flops_per_unknown() < s.reuse_flops_per_unknown) return 1;
@@ -211,11 +261,44 @@ KluSolver::Counters NewtonSolver::klu_counters() const {
   return c;
 }
 
-NewtonResult NewtonSolver::solve(NewtonProblem& problem, Vec& x, const Vec& residual_scale) {
+NewtonResult NewtonSolver::solve(NewtonProblem& problem, Vec& x, const Vec& residual_scale,
+                                 bool same_structure) {
   Impl& m = *impl_;
   const int n = problem.size();
   if (x.size() != n || residual_scale.size() != n)
     throw std::invalid_argument("NewtonSolver::solve: vector sizes do not match the problem");
+  // The chord step with the last solve's factorization (see the header).
+  // The residual at its end is the one KINSOL starts from: a problem that
+  // keeps its last residual (StepProblem) does not evaluate it twice.
+  int chords = 0;
+  Vec x0;  // the caller's start, where a chord step moved it
+  const bool eligible =
+      same_structure && settings_.jacobian_reuse != 1 && m.factored_last_solve && m.n == n;
+  bool chord = eligible && m.chord_window;
+  if (chord && m.chord_skip > 0) {
+    --m.chord_skip;
+    chord = false;
+  }
+  if (chord) {
+    Vec f0;
+    problem.residual(x, f0);
+    const double r0 = scaled_max(f0, residual_scale);
+    Vec d;
+    if (r0 > settings_.tolerance && solve_with_last_jacobian(-f0, d)) {
+      Vec x1 = x + d, f1;
+      problem.residual(x1, f1);
+      if (f1.allFinite() && scaled_max(f1, residual_scale) <= settings_.chord_contraction * r0) {
+        x0 = std::move(x);
+        x = std::move(x1);
+        chords = 1;
+        ++m.chord_steps;
+        m.chord_backoff = 1;
+      } else {
+        m.chord_skip = m.chord_backoff;
+        m.chord_backoff = std::min(2 * m.chord_backoff, Impl::kMaxChordBackoff);
+      }
+    }
+  }
   m.setup(n, settings_);
   m.problem = &problem;
   m.error = nullptr;
@@ -292,9 +375,10 @@ NewtonResult NewtonSolver::solve(NewtonProblem& problem, Vec& x, const Vec& resi
   x = Eigen::Map<const Vec>(N_VGetArrayPointer(m.u.get()), n);
   if (auto_reuse) m.watch_reuse(m.jacobian_evaluations - jacobians_before);
   m.factored_last_solve = m.jacobian_evaluations > jacobians_before;
+  if (eligible) m.watch_chords(m.jacobian_evaluations - jacobians_before);
 
   NewtonResult r;
-  r.iterations = static_cast<int>(iters);
+  r.iterations = static_cast<int>(iters) + chords;
   r.residual = m.last_residual;
   char* name = KINGetReturnFlagName(flag);
   r.message = name ? name : "KIN_UNKNOWN";
@@ -308,7 +392,20 @@ NewtonResult NewtonSolver::solve(NewtonProblem& problem, Vec& x, const Vec& resi
       r.residual <= settings_.tolerance;
   r.converged = polished || stalled_below_tolerance;
   if (!r.converged && !m.last_message.empty()) r.message += " (" + m.last_message + ")";
+  // A solve that failed after a chord step is tried again without it, by
+  // Newton's method from the caller's start: a chord step never makes a
+  // step fail (or cut back) that Newton's method alone would have solved.
+  if (!r.converged && chords > 0) {
+    x = std::move(x0);
+    NewtonResult again = solve(problem, x, residual_scale, false);
+    again.iterations += r.iterations;
+    return again;
+  }
   return r;
+}
+
+long NewtonSolver::chord_steps() const {
+  return impl_->chord_steps;
 }
 
 bool NewtonSolver::guess_meets_tolerance(NewtonProblem& problem, const Vec& x,

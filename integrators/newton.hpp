@@ -73,6 +73,9 @@ struct NewtonSettings {
   static constexpr int kAutoReuseCount = 3;
   int jacobian_reuse = kAutoReuse;
   double reuse_contraction = 0.1;
+  // A chord step that starts a solve (solve(..., same_structure)) is kept
+  // where it cuts the scaled residual by this factor or more.
+  double chord_contraction = 0.1;
   double reuse_flops_per_unknown = 3e3;
 };
 
@@ -95,7 +98,23 @@ class NewtonSolver {
   /// Solves F(x) = 0 starting from x; on return x holds the last iterate.
   /// Exceptions thrown by the problem's callbacks are rethrown here, after
   /// KINSOL has returned (they never cross the C library).
-  NewtonResult solve(NewtonProblem& problem, Vec& x, const Vec& residual_scale);
+  ///
+  /// `same_structure`: the caller knows that the last solve's Jacobian is
+  /// one of this problem's (the same unknowns and the same step length, only
+  /// the start moved on). Unless jacobian_reuse is 1, the solve may then
+  /// start with a chord step: x - J_last^-1 F(x) with the factorization
+  /// already at hand, kept where it cuts the residual by chord_contraction
+  /// or more, before the iterations with fresh Jacobians (it counts as an
+  /// iteration). Where the step's nonlinearity, not its Jacobian, limits
+  /// the first iteration, that step does about what Newton's would, at the
+  /// cost of a residual and a solve: no assembly of a Jacobian, no
+  /// factorization. Whether the chord steps save Jacobians is measured
+  /// over windows of such solves, with and without, and the better way is
+  /// taken (counts only: runs are reproducible). A solve that fails after a
+  /// chord step is repeated by Newton's method from x. (docs/performance.md
+  /// §18.)
+  NewtonResult solve(NewtonProblem& problem, Vec& x, const Vec& residual_scale,
+                     bool same_structure = false);
   /// The residual at x, if it meets the tolerance (max_i |s_i F_i|) and the
   /// energy and angular balances: x is accepted as the solution without an
   /// iteration (KINSOL accepts a guess only within 0.01 of the tolerance).
@@ -111,6 +130,8 @@ class NewtonSolver {
   /// What KLU did so far (analyses, factorizations, refactorizations), over
   /// every system size this solver has seen.
   KluSolver::Counters klu_counters() const;
+  /// Chord steps kept so far (see solve()).
+  long chord_steps() const;
 
  private:
   struct Impl;
