@@ -1197,6 +1197,45 @@ TEST(NewtonSolve, ReusedJacobiansKeepTheFigures) {
   EXPECT_LE((ends[1].q - ends[0].q).cwiseAbs().maxCoeff(), 1e-10);
 }
 
+// A chord step (NewtonSolver::solve with same_structure) is kept where it
+// cuts the residual tenfold, but the iterations from its end may still
+// fail. The solve is then repeated by Newton's method from the caller's
+// start, so a chord step never fails a solve that Newton's method alone
+// solves. f(x) = s (x - 2) below x = 3 and 0.01 s above, where the
+// Jacobian is 0 (singular): the first solve (s = 0.5) leaves J = 0.5
+// factored; from x = 0 with s = 2 its chord step goes to x = 8 (|f| from 4
+// to 0.02: kept), where Newton cannot go on; Newton's method from 0 solves
+// it in one iteration.
+TEST(NewtonSolve, ASolveThatFailsAfterAChordStepIsRepeatedByNewtonsMethod) {
+  class Kinked : public NewtonProblem {
+   public:
+    double s = 0.5;
+    int size() const override { return 1; }
+    void residual(const Vec& x, Vec& f) override {
+      f.resize(1);
+      f[0] = x[0] < 3.0 ? s * (x[0] - 2.0) : 0.01 * s;
+    }
+    void jacobian(const Vec& x, SparseMatrix& j) override {
+      j.resize(1, 1);
+      j.setZero();
+      j.insert(0, 0) = x[0] < 3.0 ? s : 0.0;
+      j.makeCompressed();
+    }
+  } problem;
+  NewtonSolver newton(NewtonSettings{1e-10, 25, false});
+  const Vec scale = Vec::Ones(1);
+  Vec x = Vec::Zero(1);
+  ASSERT_TRUE(newton.solve(problem, x, scale).converged);
+  EXPECT_NEAR(x[0], 2.0, 1e-12);
+  problem.s = 2.0;
+  x.setZero();
+  const NewtonResult r = newton.solve(problem, x, scale, true);
+  EXPECT_EQ(newton.chord_steps(), 1);  // the chord step was kept
+  ASSERT_TRUE(r.converged) << r.message;
+  EXPECT_NEAR(x[0], 2.0, 1e-12);
+  EXPECT_GE(r.iterations, 2);  // the chord step's route and Newton's
+}
+
 // Auto chooses by fill, not by size: with the threshold at 5e3 estimated
 // flops per unknown, a 50 x 50 square block (5 202 dofs, 7.2e3 flops per
 // unknown by KLU's analysis) goes to UMFPACK and a thin ring of 400 x 10
