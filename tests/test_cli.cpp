@@ -274,10 +274,14 @@ TEST(Cli, NoArgumentsRunsTheBuiltInDefaultScene) {
   EXPECT_EQ(s["steps"], 2000);
   EXPECT_LT(s["energy_rel_error_max"].get<double>(), 1e-8);
   // Contact from t = 6.1 to 16.0 (the paper's window is [6, 16]; midpoint,
-  // galpha and IDA end within 0.1 of it too, docs/contact.md).
+  // galpha and IDA end within 0.1 of it too, docs/contact.md). The end is
+  // the last of the single-node touches the rings make while they part,
+  // from t = 14.5 on, and which touch is the last depends on the round-off
+  // of the chatter before it: 15.66, 16.05 and 16.06 in three runs that
+  // differed only at round-off (2026-11-28).
   ASSERT_TRUE(s["contact_window"].is_array()) << s;
   EXPECT_NEAR(s["contact_window"][0].get<double>(), 6.1, 0.1);
-  EXPECT_NEAR(s["contact_window"][1].get<double>(), 16.0, 0.3);
+  EXPECT_NEAR(s["contact_window"][1].get<double>(), 16.0, 0.5);
   EXPECT_EQ(
       read_lines(dir / "out/default/history.csv")[0],
       std::string(kHeader2D) + ",active_contacts,contact_events,gap_violation_max,penetration_max");

@@ -1236,6 +1236,54 @@ TEST(NewtonSolve, ASolveThatFailsAfterAChordStepIsRepeatedByNewtonsMethod) {
   EXPECT_GE(r.iterations, 2);  // the chord step's route and Newton's
 }
 
+// A contact run changes its system's size with each change of the active
+// set and returns to sizes it had. The Newton solver parks the machinery of
+// the sizes it leaves (NewtonSolver::Impl::Parked): back at a size with the
+// pattern it had, KLU refactors on its kept analysis and pivot order
+// instead of analysing and factoring afresh. Sizes 40, 41, 40, 41, 42, 40:
+// three analyses (one per size), not six, and every solve exact.
+TEST(NewtonSolve, ReturningToASizeKeepsItsAnalysis) {
+  class Tridiagonal : public NewtonProblem {
+   public:
+    int n = 40;
+    double shift = 0.0;
+    int size() const override { return n; }
+    // (4 + shift) x_i - x_i-1 - x_i+1 + 0.1 x_i^3 = 1
+    void residual(const Vec& x, Vec& f) override {
+      f.resize(n);
+      for (int i = 0; i < n; ++i)
+        f[i] = (4.0 + shift) * x[i] - (i > 0 ? x[i - 1] : 0.0) - (i + 1 < n ? x[i + 1] : 0.0) +
+               0.1 * x[i] * x[i] * x[i] - 1.0;
+    }
+    void jacobian(const Vec& x, SparseMatrix& j) override {
+      std::vector<Eigen::Triplet<double, SparseMatrix::StorageIndex>> t;
+      for (int i = 0; i < n; ++i) {
+        t.emplace_back(i, i, 4.0 + shift + 0.3 * x[i] * x[i]);
+        if (i > 0) t.emplace_back(i, i - 1, -1.0);
+        if (i + 1 < n) t.emplace_back(i, i + 1, -1.0);
+      }
+      j.resize(n, n);
+      j.setFromTriplets(t.begin(), t.end());
+      j.makeCompressed();
+    }
+  } problem;
+  NewtonSolver newton(NewtonSettings{1e-12, 25, false});
+  int k = 0;
+  for (const int n : {40, 41, 40, 41, 42, 40}) {
+    problem.n = n;
+    problem.shift = 0.1 * k++;
+    Vec x = Vec::Zero(n);
+    const NewtonResult r = newton.solve(problem, x, Vec::Ones(n));
+    ASSERT_TRUE(r.converged) << n << ": " << r.message;
+    Vec f;
+    problem.residual(x, f);
+    EXPECT_LE(f.cwiseAbs().maxCoeff(), 1e-12) << n;
+  }
+  const KluSolver::Counters c = newton.klu_counters();
+  EXPECT_EQ(c.analyses, 3);
+  EXPECT_EQ(c.factorizations, 3);  // the returns refactor on the kept pivots
+}
+
 // Auto chooses by fill, not by size: with the threshold at 5e3 estimated
 // flops per unknown, a 50 x 50 square block (5 202 dofs, 7.2e3 flops per
 // unknown by KLU's analysis) goes to UMFPACK and a thin ring of 400 x 10
