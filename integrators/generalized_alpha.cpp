@@ -378,7 +378,7 @@ void GeneralizedAlphaStepper::start(State& s) {
   ea_ = e_;
   started_ = true;
   ++n_starts_;
-  solved_before_ = false;  // a start is a fresh one: no chord step on an earlier run's Jacobian
+  last_structure_.forget();  // a start is a fresh one: no chord step on an earlier run's Jacobian
 }
 
 GeneralizedAlphaStepper::Trial GeneralizedAlphaStepper::solve(const State& s, double dt) {
@@ -394,12 +394,8 @@ GeneralizedAlphaStepper::Trial GeneralizedAlphaStepper::solve(const State& s, do
   // With the active set and step of the solve before, the solve may start
   // with a chord step on its factorization (newton.hpp), as em's and
   // midpoint's do: the schemes are compared with the same Newton solve.
-  const bool same_structure =
-      solved_before_ && std::abs(solved_dt_ - dt) <= 1e-6 * dt && solved_active_ == s.active;
+  const bool same_structure = last_structure_.same_as_last(s.active, dt);
   tr.result = newton_.solve(problem, x, problem.scale(), same_structure);
-  solved_before_ = true;
-  solved_active_ = s.active;
-  solved_dt_ = dt;
   if (!tr.result.converged) return tr;
   // The same kinematics and forces as the residual's, at the solution.
   Vec f;

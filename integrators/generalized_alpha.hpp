@@ -92,11 +92,8 @@ class GeneralizedAlphaStepper final : public Stepper {
   const System& system_;
   GeneralizedAlphaSettings p_;
   NewtonSolver newton_;
-  // The active set and step of the last Newton solve, whose last Jacobian
-  // the solver keeps factored (NewtonSolver::solve's same_structure).
-  bool solved_before_ = false;
-  std::vector<int> solved_active_;
-  double solved_dt_ = 0.0;
+  // Of the last Newton solve, whose last Jacobian the solver keeps factored.
+  SolveStructure last_structure_;
   ActiveSet active_set_;
   // The state handed out last, with its accelerations, its loads f, its
   // external forces e (loads and support reactions) and their

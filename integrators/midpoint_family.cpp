@@ -159,13 +159,8 @@ StepStats MidpointFamilyStepper::solve_substep(State& state, double dt, const Ve
   } else {
     // A solve from the predictor whose last factored Jacobian had the same
     // active set and step length starts with a chord step (newton.hpp).
-    const bool same_structure = !guess && factored_.valid &&
-                                std::abs(factored_.h - dt) <= 1e-6 * dt &&
-                                factored_.active == state.active;
+    const bool same_structure = last_structure_.same_as_last(state.active, dt) && !guess;
     r = newton_.solve(problem, x, problem.scale(), same_structure);
-    factored_.valid = true;
-    factored_.active = state.active;
-    factored_.h = dt;
   }
   last_.valid = r.converged && !predictor_accepted;
   if (r.converged) last_.start = state, last_.h = dt, last_.targets = targets, last_.x = x;

@@ -98,14 +98,8 @@ class MidpointFamilyStepper : public Stepper, public SubstepScheme {
     double h = 0.0;
     Vec targets, x;
   } last_;
-  // The structure of the last Newton solve, whose last Jacobian the
-  // solver keeps factored: the active contacts and the step length (see
-  // NewtonSolver::solve's same_structure).
-  struct Factored {
-    bool valid = false;
-    std::vector<int> active;
-    double h = 0.0;
-  } factored_;
+  // Of the last Newton solve, whose last Jacobian the solver keeps factored.
+  SolveStructure last_structure_;
 };
 
 }  // namespace emdae

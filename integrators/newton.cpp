@@ -36,17 +36,31 @@ bool balanced(const NewtonSettings& s, const NewtonProblem& problem, const Vec& 
          (s.angular_tolerance <= 0 || problem.angular_residual(x, f) <= s.angular_tolerance);
 }
 
-}  // namespace
-
-struct NewtonSolver::Impl {
-  // Declared in the order of their dependence: freed the other way round.
+// The SUNDIALS context of a Newton solver: a base of Impl, so that it is
+// made before and freed after everything made with it (the machinery below,
+// current and parked).
+struct SundialsContext {
   sundials::Context ctx = sundials::make_context();
+};
+
+// What a Newton solve of one system size is made of: its vectors, the
+// Jacobian's matrix, the linear solver (with its analysis and
+// factorization) and the KINSOL memory. Declared in the order of their
+// dependence: freed the other way round.
+struct SizedMachinery {
   sundials::Vector u, uscale, fscale;
   sundials::Matrix jmat;
   std::unique_ptr<KluSolver> klu;
   sundials::Memory<KINFree> kin;
   int n = -1;
+  // How many iterations a Jacobian serves (KINSOL's max setup calls, set
+  // on kin; Impl::set_reuse).
+  int reuse = 0;
+};
 
+}  // namespace
+
+struct NewtonSolver::Impl : SundialsContext, SizedMachinery {
   // Per-solve state reachable from the callbacks.
   NewtonProblem* problem = nullptr;
   std::exception_ptr error;
@@ -65,17 +79,9 @@ struct NewtonSolver::Impl {
   // instead of analysing and factoring afresh (docs/performance.md §18).
   // Only small systems are parked (kParkedDofs: the factors of a large one
   // are memory the run may not have), at most kParked of them.
-  struct Parked {
-    sundials::Vector u, uscale, fscale;
-    sundials::Matrix jmat;
-    std::unique_ptr<KluSolver> klu;
-    sundials::Memory<KINFree> kin;
-    int n = -1;
-    int reuse = 0;
-  };
   static constexpr int kParked = 4;
   static constexpr int kParkedDofs = 50000;
-  std::vector<Parked> parked;
+  std::vector<SizedMachinery> parked;
 
   ~Impl() {
     release();
@@ -91,39 +97,29 @@ struct NewtonSolver::Impl {
     n = -1;
   }
 
-  // Frees the oldest parked machinery, its KINSOL memory first.
+  // Frees the oldest parked machinery (in SizedMachinery's order: its
+  // KINSOL memory first), keeping its counts.
   void drop_parked() {
-    Parked& p = parked.back();
-    p.kin.reset();
-    before += p.klu->counters();
+    before += parked.back().klu->counters();
     parked.pop_back();
   }
 
   // Parks the current machinery (where it is small enough) and takes the
   // one of `size` out of the park; false if none is parked.
   bool swap_in(int size) {
+    SizedMachinery& current = *this;  // empty after it is parked or released
     if (n > 0 && n <= kParkedDofs && klu) {
       pivot_fill = klu->pivot_fill();
-      Parked p;
-      p.u = std::move(u), p.uscale = std::move(uscale), p.fscale = std::move(fscale);
-      p.jmat = std::move(jmat);
-      p.klu = std::move(klu);
-      p.kin = std::move(kin);
-      p.n = n, p.reuse = reuse;
-      parked.insert(parked.begin(), std::move(p));
-      n = -1;
+      parked.insert(parked.begin(), std::move(current));
+      current = SizedMachinery{};
     } else {
       release();
     }
-    const auto it =
-        std::find_if(parked.begin(), parked.end(), [&](const Parked& p) { return p.n == size; });
+    const auto it = std::find_if(parked.begin(), parked.end(),
+                                 [&](const SizedMachinery& p) { return p.n == size; });
     bool found = false;
     if (it != parked.end()) {
-      u = std::move(it->u), uscale = std::move(it->uscale), fscale = std::move(it->fscale);
-      jmat = std::move(it->jmat);
-      klu = std::move(it->klu);
-      kin = std::move(it->kin);
-      n = it->n, reuse = it->reuse;
+      current = std::move(*it);
       parked.erase(it);
       found = true;
     }
@@ -205,7 +201,6 @@ struct NewtonSolver::Impl {
   static constexpr int kChordWindow = 16, kChordRun = 16;
   static constexpr double kChordSaving = 0.3;
   bool chord_window = true;     // this window takes chord steps
-  bool chord_better = true;     // the last measurements' verdict
   bool chord_measuring = true;  // this window measures, or runs the better
   int chord_windows_left = 1;
   long window_eligible = 0, window_jacobians_count = 0;
@@ -219,8 +214,6 @@ struct NewtonSolver::Impl {
     const double per_solve = double(window_jacobians_count) / double(window_eligible);
     (chord_window ? jacobians_with_chord : jacobians_without) = per_solve;
     window_eligible = window_jacobians_count = 0;
-    if (jacobians_with_chord >= 0 && jacobians_without >= 0)
-      chord_better = jacobians_with_chord <= jacobians_without - kChordSaving;
     if (--chord_windows_left > 0) return;
     const bool other_measured = (chord_window ? jacobians_without : jacobians_with_chord) >= 0;
     if (!chord_measuring || !other_measured) {  // the other way for one window
@@ -229,7 +222,7 @@ struct NewtonSolver::Impl {
       chord_windows_left = 1;
     } else {  // both measured: the better for a run
       chord_measuring = false;
-      chord_window = chord_better;
+      chord_window = jacobians_with_chord <= jacobians_without - kChordSaving;
       chord_windows_left = kChordRun;
     }
   }
@@ -252,9 +245,8 @@ struct NewtonSolver::Impl {
     window_solves = window_jacobians = 0;
   }
 
-  // How many iterations a Jacobian serves (KINSOL's max setup calls), with
-  // the residual monitoring that renews it where it is > 1.
-  int reuse = 0;
+  // How many iterations a Jacobian serves (`reuse`: KINSOL's max setup
+  // calls), with the residual monitoring that renews it where it is > 1.
   void set_reuse(int count, const NewtonSettings& s) {
     if (count == reuse) return;
     reuse = count;
@@ -321,7 +313,7 @@ KluSolver::Counters NewtonSolver::klu_counters() const {
   const Impl& m = *impl_;
   KluSolver::Counters c = m.before;
   if (m.klu) c += m.klu->counters();
-  for (const Impl::Parked& p : m.parked) c += p.klu->counters();
+  for (const SizedMachinery& p : m.parked) c += p.klu->counters();
   return c;
 }
 

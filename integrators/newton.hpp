@@ -11,8 +11,10 @@
 // the unknowns (for the mechanical steppers: length).
 #pragma once
 
+#include <cmath>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "core/system.hpp"
 #include "integrators/klu_solver.hpp"
@@ -84,6 +86,30 @@ struct NewtonResult {
   int iterations = 0;
   double residual = 0.0;  // final max_i |s_i F_i|
   std::string message;    // KINSOL's flag name and, on failure, its last error
+};
+
+/// The active contacts and step length of a stepper's last Newton solve:
+/// a solve with the same ones has the Jacobian structure of the last
+/// (NewtonSolver::solve's same_structure). em, midpoint and generalized-α
+/// keep one each.
+class SolveStructure {
+ public:
+  /// Whether (active, h) is the one noted last (h within 1e-6 of it:
+  /// sub-steps that add up to a step differ by round-off), then notes it.
+  bool same_as_last(const std::vector<int>& active, double h) {
+    const bool same = valid_ && std::abs(h_ - h) <= 1e-6 * h && active_ == active;
+    valid_ = true;
+    active_ = active;
+    h_ = h;
+    return same;
+  }
+  /// The next solve has no structure to share (a fresh start).
+  void forget() { valid_ = false; }
+
+ private:
+  bool valid_ = false;
+  std::vector<int> active_;
+  double h_ = 0.0;
 };
 
 class NewtonSolver {
