@@ -140,8 +140,9 @@ void StepProblem::residual(const Vec& x, Vec& f) {
   const Vec q1 = x.head(n_);
   const Vec lambda = kappa_ * x.tail(m_);
   // The same point again (Newton's first residual after a guess was
-  // tried, NewtonSolver::guess_meets_tolerance): everything the residual
-  // sets is as it was left there.
+  // tried, NewtonSolver::guess_meets_tolerance, or at the end of a kept
+  // chord step, NewtonSolver::solve): everything the residual sets is as
+  // it was left there.
   if (res_f_.size() == size() && at_last_residual(q1, lambda)) {
     f = res_f_;
     return;
