@@ -123,8 +123,9 @@ std::vector<int> positions_in(const std::vector<int>& active, const std::vector<
 
 }  // namespace
 
-// A state at the end of a trial over [0, tau], with the gaps and gap rates
-// of the nodes that may hit.
+// A state at the end of a trial over [0, tau]; at the bracket's first ends
+// also the gaps and gap rates of the nodes that may hit (the first
+// estimate's Hermite interpolants; later trials need neither).
 struct ContactStepper::Point {
   double tau = 0.0;
   State state;
@@ -137,15 +138,17 @@ ContactStepper::ContactStepper(const System& system, double gap_tolerance, Impac
     : system_(system), set_(system, gap_tolerance, persistency), impact_(impact) {}
 
 ContactStepper::Point ContactStepper::point(double tau, const State& state,
-                                            const std::vector<int>& ids) const {
+                                            const std::vector<int>& ids, Vec rate) const {
   Point p;
   p.tau = tau;
   p.state = state;
+  p.end_rate = std::move(rate);
+  const Vec& along = p.end_rate.size() ? p.end_rate : state.v;
   p.gaps.resize(static_cast<Eigen::Index>(ids.size()));
   p.rates.resize(static_cast<Eigen::Index>(ids.size()));
   for (std::size_t i = 0; i < ids.size(); ++i) {
     p.gaps[static_cast<Eigen::Index>(i)] = set_.gap(ids[i], state.q);
-    p.rates[static_cast<Eigen::Index>(i)] = set_.gap_rate(ids[i], state.q, state.v);
+    p.rates[static_cast<Eigen::Index>(i)] = set_.gap_rate(ids[i], state.q, along);
   }
   return p;
 }
@@ -455,19 +458,13 @@ ContactStepper::Outcome ContactStepper::locate(SubstepScheme& scheme, State& s, 
   const double tol = set_.gap_tolerance();
   const std::vector<int> open = set_.open(s, s.q);
   const ActiveSet::Targets targets = set_.targets(s, kept_);
-  Point a = point(0.0, s, open), b = point(h, end, open);
   // The rates at the bracket's end with the sub-step's length, where the
   // scheme gives them (its last solve is the one that ended at `end`); at
   // tau = 0 they are the gaps' rates at v_0 (q_1 -> q_0 + tau v_0), so the
   // cubic Hermite below interpolates f itself.
-  {
-    const Vec rate = scheme.end_rate();
-    if (rate.size() == end.q.size()) {
-      for (std::size_t i = 0; i < open.size(); ++i)
-        b.rates[static_cast<Eigen::Index>(i)] = set_.gap_rate(open[i], end.q, rate);
-      b.end_rate = rate;
-    }
-  }
+  Vec end_rate = scheme.end_rate();
+  if (end_rate.size() != end.q.size()) end_rate.resize(0);
+  Point a = point(0.0, s, open), b = point(h, end, open, std::move(end_rate));
   // f(tau) = the least open gap at the end of a trial over [0, tau]. A
   // scheme's end point q_1(tau) of a step of length tau is not a trajectory:
   // the rate of f is that of q_1 with tau (SubstepScheme::end_rate), not the
@@ -589,14 +586,16 @@ ContactStepper::Outcome ContactStepper::locate(SubstepScheme& scheme, State& s, 
       const double slope = least < 0 ? 0.0 : set_.gap_rate(least, sub.q, rate);
       if (slope != 0.0 && std::isfinite(slope)) newton_tau = tau - g / slope;
     }
-    Point p = point(tau, sub, open);
-    if (rate.size() == sub.q.size()) p.end_rate = std::move(rate);
+    Point p;
+    p.tau = tau;
+    p.state = std::move(sub);
+    if (rate.size() == p.state.q.size()) p.end_rate = std::move(rate);
     if (g < 0) {
       c_tau = b.tau, fc = fb;
-      b = p, fb = g;
+      b = std::move(p), fb = g;
     } else {
       c_tau = a.tau, fc = fa;
-      a = p, fa = g;
+      a = std::move(p), fa = g;
     }
   }
   total.message = "impact location did not converge";

@@ -119,7 +119,10 @@ class ContactStepper {
   // count: add it to counters_ (not for a probe).
   bool velocity_update(SubstepScheme& scheme, const State& start, State& end,
                        const std::vector<int>& entered, StepStats& stats, bool count = true);
-  Point point(double tau, const State& state, const std::vector<int>& ids) const;
+  // The gaps of `ids` at the end of a trial over [0, tau], and their rates
+  // along `rate` (d q_1 / d tau, where the scheme gives it) or else along
+  // the state's velocity.
+  Point point(double tau, const State& state, const std::vector<int>& ids, Vec rate = {}) const;
 
   const System& system_;
   ActiveSet set_;

@@ -84,6 +84,8 @@ MidpointFamilyStepper::MidpointFamilyStepper(const System& system, GradientKind 
   m_fp_.resize(nf, n);
   m_fp_.setFromTriplets(fp.begin(), fp.end());
   m_ff_.compute(std::move(mff), scheme_.iterative_mass_from);
+  for (const auto& term : system_.potentials())
+    if (term->depends_on_time()) potentials_timeless_ = false;
 }
 
 std::vector<const Term*> MidpointFamilyStepper::active_terms(const std::vector<int>& active) const {
@@ -163,7 +165,11 @@ StepStats MidpointFamilyStepper::solve_substep(State& state, double dt, const Ve
     r = newton_.solve(problem, x, problem.scale(), same_structure);
   }
   last_.valid = r.converged && !predictor_accepted;
-  if (r.converged) last_.start = state, last_.h = dt, last_.targets = targets, last_.x = x;
+  if (r.converged) {
+    last_.start = state, last_.h = dt, last_.targets = targets, last_.x = x;
+    if (!potentials_timeless_ || !problem.potential_forces_at(x.head(n), last_.potential_forces))
+      last_.potential_forces.resize(0);
+  }
   x.tail(m) *= problem.kappa();
   StepStats stats;
   stats.converged = r.converged;
@@ -216,19 +222,29 @@ double MidpointFamilyStepper::driven_work(const Vec& q0, const Vec& q1, const Ve
 // h: the inertia rows, loads and driven constraints at t0 + h, the rows'
 // scaling), J the solve's last factorization (of its next-to-last iterate:
 // a relative error of the order of that iterate's, below 1e-6 in a
-// converged solve).
+// converged solve). The potential terms' forces G_V(q0, q1) do not depend
+// on h unless a potential depends on time: they are the solve's own, from
+// its last residual, not assembled twice more.
 Vec MidpointFamilyStepper::end_rate() {
   if (!last_.valid) return {};
   const int n = system_.n_dofs();
   const std::vector<const Term*> extra = active_terms(last_.start.active);
   const double h = last_.h, dh = 1e-5 * h;
+  const Vec* known = last_.potential_forces.size() ? &last_.potential_forces : nullptr;
+  const Vec q1 = last_.x.head(n);
   Vec f_plus, f_minus, d;
-  StepProblem(system_, kind_, last_.start, h + dh, extra, last_.targets, stiffness_diag_,
-              full_stiffness_diag_, &pattern_)
-      .residual(last_.x, f_plus);
-  StepProblem(system_, kind_, last_.start, h - dh, extra, last_.targets, stiffness_diag_,
-              full_stiffness_diag_, &pattern_)
-      .residual(last_.x, f_minus);
+  {
+    StepProblem plus(system_, kind_, last_.start, h + dh, extra, last_.targets, stiffness_diag_,
+                     full_stiffness_diag_, &pattern_);
+    plus.use_potential_forces(known, q1);
+    plus.residual(last_.x, f_plus);
+  }
+  {
+    StepProblem minus(system_, kind_, last_.start, h - dh, extra, last_.targets, stiffness_diag_,
+                      full_stiffness_diag_, &pattern_);
+    minus.use_potential_forces(known, q1);
+    minus.residual(last_.x, f_minus);
+  }
   if (!newton_.solve_with_last_jacobian(-(f_plus - f_minus) / (2.0 * dh), d)) return {};
   return d.head(n);
 }

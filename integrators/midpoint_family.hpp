@@ -97,7 +97,9 @@ class MidpointFamilyStepper : public Stepper, public SubstepScheme {
     State start;
     double h = 0.0;
     Vec targets, x;
+    Vec potential_forces;  // G_V at its solution (empty: not known)
   } last_;
+  bool potentials_timeless_ = true;  // no potential term depends on time
   // Of the last Newton solve, whose last Jacobian the solver keeps factored.
   SolveStructure last_structure_;
 };

@@ -44,7 +44,6 @@ StepProblem::StepProblem(const System& s, GradientKind kind, const State& start,
     if (!s_.is_prescribed()[static_cast<std::size_t>(i)])
       sum += 2.0 * mass[i] / (dt * dt) + full_stiffness[i], ++count;
   kappa_ = count ? sum / count : 1.0;
-  kinetic0_ = 0.5 * v0_.dot(s_.mass() * v0_);
   // The angular momentum has a balance only where every term is invariant
   // under rotations (verify/recorder.cpp, conservation_of).
   angular_balance_ = s_.term_symmetry().rotation;
@@ -148,6 +147,7 @@ void StepProblem::residual(const Vec& x, Vec& f) {
     return;
   }
   res_f_.resize(0);  // until this evaluation completes
+  res_q1_.resize(0);
   f.resize(size());
   // The forces F (and loads f) are kept with the point they were evaluated
   // at: the velocity update after the solve needs them at the solution,
@@ -157,7 +157,11 @@ void StepProblem::residual(const Vec& x, Vec& f) {
   if (massless_mode()) {
     add_massless_forces(q1, lambda, res_force_, &res_load_, nullptr);
   } else {
-    assembler_.add_potential_forces(kind_, q0_, q1, t0_, t1_, res_force_, nullptr);
+    if (known_potential_ && q1 == known_q1_)
+      res_force_ = *known_potential_;
+    else
+      assembler_.add_potential_forces(kind_, q0_, q1, t0_, t1_, res_force_, nullptr);
+    res_potential_ = res_force_;
     assembler_.add_constraint_forces(kind_, q0_, q1, t0_, t1_, lambda, res_force_, &phi_, nullptr,
                                      n_, n_, 1.0, &increment_);
     if (!s_.loads().empty()) {
@@ -292,6 +296,19 @@ void StepProblem::forces(const Vec& q1, const Vec& lambda, Vec& force, Vec& load
     s_.add_load_forces(load_point(q1), load_time(), load);
     force -= load;
   }
+}
+
+bool StepProblem::potential_forces_at(const Vec& q1, Vec& out) const {
+  if (massless_mode() || res_potential_.size() != n_ || q1.size() != res_q1_.size() ||
+      q1 != res_q1_)
+    return false;
+  out = res_potential_;
+  return true;
+}
+
+void StepProblem::use_potential_forces(const Vec* known, const Vec& q1) {
+  known_potential_ = known && known->size() == n_ ? known : nullptr;
+  known_q1_ = known_potential_ ? q1 : Vec();
 }
 
 void StepProblem::add_massless_forces(const Vec& q1, const Vec& lambda, Vec& force, Vec* load,
@@ -525,6 +542,9 @@ double StepProblem::energy_residual(const Vec& x, const Vec& f) const {
   const Vec dq = x.head(n_) - q0_;
   const Vec inertia = (2.0 / (dt_ * dt_)) * (s_.mass() * (dq - dt_ * v0_));
   const Vec& m = s_.lumped_mass();
+  // The kinetic energy at the start, on the first call (a problem that
+  // only gives residuals, SubstepScheme::end_rate's, never needs it).
+  if (kinetic0_ < 0.0) kinetic0_ = 0.5 * v0_.dot(s_.mass() * v0_);
   double error = 0.0, scale = kinetic0_;
   for (int i = 0; i < n_; ++i) {
     if (s_.is_prescribed()[static_cast<std::size_t>(i)]) continue;

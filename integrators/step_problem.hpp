@@ -100,6 +100,15 @@ class StepProblem final : public NewtonProblem {
   /// `load` (their work is load . (q1 - q0)).
   void forces(const Vec& q1, const Vec& lambda, Vec& force, Vec& load);
 
+  /// The potential terms' forces G_V at q1, if the last residual was
+  /// evaluated there (outside massless mode): into `out`, and true.
+  bool potential_forces_at(const Vec& q1, Vec& out) const;
+  /// Residuals at q1 take G_V from `known` instead of assembling it: the
+  /// caller knows it for this q0 and q1 (potential_forces_at of a problem of
+  /// the same start and another step length, when no potential depends on
+  /// time). Ignored in massless mode. Null: assembled again.
+  void use_potential_forces(const Vec* known, const Vec& q1);
+
  private:
   bool massless_mode() const { return !groups_.empty(); }
   // The penalty rows (see the header): D_l and dD_l/dPhi_1 at q1.
@@ -138,10 +147,13 @@ class StepProblem final : public NewtonProblem {
   double kappa_ = 1.0;
   Vec penalty_;  // k_l of each row, 0 for an exact constraint
   std::vector<int> penalty_rows_;
-  double kinetic0_ = 0.0;
-  bool angular_balance_ = true;  // every term invariant under rotations
+  mutable double kinetic0_ = -1.0;  // energy_residual(): 1/2 v0 M v0, once asked for
+  bool angular_balance_ = true;     // every term invariant under rotations
   Vec phi_, force_;
   Vec res_q1_, res_lambda_, res_force_, res_load_;  // the last residual's point and forces
+  Vec res_potential_;                               // and G_V there (res_force_'s first part)
+  const Vec* known_potential_ = nullptr;            // use_potential_forces()
+  Vec known_q1_;
   Vec res_f_;  // and the residual itself (a second call at that point copies it)
   /// Whether (q1, lambda) is the last residual's point.
   bool at_last_residual(const Vec& q1, const Vec& lambda) const {

@@ -8,7 +8,8 @@
 //    closed forms: stretched, turned and partly uncovered surfaces;
 //  - two-ring impact: energy, linear and angular momentum conserved through
 //    the impact with impact location on, gaps of active nodes closed, no
-//    penetration; with impact location off the energy error it removes shows.
+//    penetration; with impact location off the energy error it removes shows;
+//  - the bucket grid's queries against all pairs.
 #include <gtest/gtest.h>
 
 #include <Eigen/Geometry>
@@ -18,10 +19,12 @@
 
 #include "contact/jet.hpp"
 #include "contact/mortar.hpp"
+#include "contact/search.hpp"
 #include "core/gradient.hpp"
 #include "core/load.hpp"
 #include "core/particles.hpp"
 #include "core/quantities.hpp"
+#include "core/user_term.hpp"
 #include "integrators/driver.hpp"
 #include "integrators/midpoint_family.hpp"
 #include "integrators/schemes.hpp"
@@ -31,6 +34,37 @@
 namespace emdae {
 namespace {
 using namespace test_systems;
+
+// Random boxes, some left of and below the origin, some spanning many
+// cells, the grid built twice into the same storage: every query returns
+// exactly the boxes that overlap it, each once, in ascending order.
+TEST(BucketGrid, QueriesFindExactlyTheOverlappingBoxesAfterRebuilds) {
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> centre(-20.0, 20.0), size(0.0, 3.0), big(0.0, 15.0);
+  auto random_box = [&](bool large) {
+    const Eigen::Vector2d c(centre(rng), centre(rng));
+    const Eigen::Vector2d half(large ? big(rng) : size(rng), large ? big(rng) : size(rng));
+    return Box{c - half, c + half};
+  };
+  BucketGrid grid;
+  std::vector<int> found;
+  long checked = 0;
+  for (int build = 0; build < 2; ++build) {
+    std::vector<Box> boxes;
+    for (int b = 0; b < 300; ++b) boxes.push_back(random_box(b % 50 == 0));
+    grid.build(boxes, 1.5 + build);
+    for (int q = 0; q < 200; ++q) {
+      const Box query = random_box(q % 40 == 0);
+      grid.query(query, found);
+      std::vector<int> expected;
+      for (std::size_t b = 0; b < boxes.size(); ++b)
+        if (boxes[b].overlaps(query)) expected.push_back(static_cast<int>(b));
+      ASSERT_EQ(found, expected) << "build " << build << ", query " << q;
+      checked += static_cast<long>(expected.size());
+    }
+  }
+  EXPECT_GT(checked, 200);  // the queries did meet boxes
+}
 
 TEST(MortarPairGap, FlatParallelSegmentsGiveTheDistance) {
   // Slave (0,0)->(1,0), body above (on its left), outward normal (0,-1);
@@ -650,6 +684,53 @@ TEST(ImpactLocation, EndRateIsTheSolutionsDerivativeInTheStepLength) {
       EXPECT_LE((rate - central).norm(), 1e-7 * central.norm()) << scheme << " h " << h;
       // Not the end velocity: q_1(h) is not a trajectory.
       EXPECT_GT((rate - mid.v).norm(), 1e-4 * mid.v.norm()) << scheme << " h " << h;
+    }
+  }
+}
+
+// end_rate takes the potential terms' forces from the solve's last
+// residual (they do not depend on h) unless a potential depends on time.
+// Both ways against central differences of two more solves: a Green spring
+// hanging from a pendulum (forces nonlinear in q), and the same with a
+// time-dependent pull on the weight, V = -(1 + sin 3t) y_1, whose force at
+// t_0 + h does depend on h (reused, its share of dR/dh would be lost).
+TEST(ImpactLocation, EndRateKeepsTheSolvesPotentialForcesOnlyWhereTheyDoNotDependOnTime) {
+  for (bool timed : {false, true}) {
+    System s(2);
+    s.add_node(Eigen::Vector2d(1, 0), Eigen::Vector2d(0.3, 1));
+    s.add_node(Eigen::Vector2d(1.2, -1.1), Eigen::Vector2d(-0.5, 0.2));
+    s.add_mass(0, 0, 1.0);
+    s.add_mass(1, 1, 0.5);
+    s.add_constraint(make_anchor_link(s, 0, Eigen::Vector2d(0, 0), 1.0));
+    s.add_potential(make_spring(s, 0, 1, 40.0, 1.0, SpringLaw::Green));
+    if (timed) {
+      FunctionOfQ pull;
+      pull.value = [](const Vec& q, double t) { return -(1.0 + std::sin(3.0 * t)) * q[1]; };
+      pull.gradient = [](const Vec&, double t) {
+        Vec g = Vec::Zero(2);
+        g[1] = -(1.0 + std::sin(3.0 * t));
+        return g;
+      };
+      pull.hessian = [](const Vec&, double) { return Mat(Mat::Zero(2, 2)); };
+      s.add_potential(make_function_term({s.dof(1, 0), s.dof(1, 1)}, pull, "pull", true));
+    }
+    for (const char* scheme : {"em", "midpoint"}) {
+      auto stepper = make_stepper(scheme, s, SchemeSettings(NewtonSettings{1e-14, 30, false}));
+      auto* sub = dynamic_cast<SubstepScheme*>(stepper.get());
+      ASSERT_NE(sub, nullptr);
+      const double h = 0.2;
+      State start = initial_state(s);
+      start.t = 0.4;
+      State mid = start, lo = start, hi = start;
+      ASSERT_TRUE(sub->solve_substep(mid, h, Vec(), nullptr).converged);
+      const Vec rate = sub->end_rate();
+      ASSERT_EQ(rate.size(), 4) << scheme;
+      const double dh = 1e-4 * h;
+      ASSERT_TRUE(sub->solve_substep(lo, h - dh, Vec(), nullptr).converged);
+      ASSERT_TRUE(sub->solve_substep(hi, h + dh, Vec(), nullptr).converged);
+      const Vec central = (hi.q - lo.q) / (2 * dh);
+      EXPECT_LE((rate - central).norm(), 1e-7 * central.norm())
+          << scheme << (timed ? " with the timed pull" : "");
     }
   }
 }
