@@ -129,6 +129,15 @@ class ContactStepper {
   ImpactTreatment impact_;
   ImpactCounters counters_;
   double last_h_ = 0.0;  // length of the last accepted sub-step
+  // After a located impact: the trial over the whole sub-step that found
+  // it (its end, active set and multipliers), the start of the sub-step
+  // that follows to the same end.
+  struct Pending {
+    bool valid = false;
+    double t_end = 0.0;
+    Vec q, lambda;
+    std::vector<int> active;
+  } after_impact_;
   // Active nodes found inside whose pull to 0 could not be done or taken
   // back (settle_changed_functions): they keep their gap as target.
   std::vector<int> kept_;

@@ -763,5 +763,76 @@ TEST(ImpactLocation, FewTrialsPerImpact) {
   EXPECT_LT(trials * iterations, 8.0);  // Newton iterations per located impact
 }
 
+// After a located impact the sub-step to the same end starts from the end
+// of the trial over the whole sub-step that found the impact
+// (ContactStepper::substep), not from the predictor q0 + h v0. A scheme
+// that wraps em records the solves: each such sub-step's guess is that
+// trial's end, and solved again from the predictor (on a copy of its
+// start) it takes more Newton iterations, summed over the impacts.
+TEST(ImpactLocation, TheSubstepAfterAnImpactStartsFromTheWholeTrial) {
+  const RingImpact scene = ring_impact(0.5, 10.0, 4.0);
+  SchemeSettings settings(NewtonSettings{1e-11, 25, false});
+  settings.contact.impact = ImpactTreatment::Locate;
+  const System& system = scene.model->system();
+  auto stepper = make_stepper("em", system, settings);
+  auto* em = dynamic_cast<MidpointFamilyStepper*>(stepper.get());
+  ASSERT_NE(em, nullptr);
+  auto spare = make_stepper("em", system, settings);  // for the predictor's solves
+  auto* em_spare = dynamic_cast<MidpointFamilyStepper*>(spare.get());
+
+  struct Recording final : SubstepScheme {
+    MidpointFamilyStepper* em = nullptr;
+    MidpointFamilyStepper* spare = nullptr;
+    ContactStepper* contact = nullptr;
+    double t_end = 0.0;
+    Vec whole_trial;  // the end of the last solve that reached the step's end
+    long impacts_seen = 0, checked = 0, from_trial = 0, from_predictor = 0;
+    StepStats solve_substep(State& s, double h, const Vec& targets,
+                            const SolveGuess* guess) override {
+      // The first solve after an impact was located, to the step's end.
+      const bool after_impact = contact->counters().impacts > impacts_seen &&
+                                std::abs(s.t + h - t_end) <= 1e-12 && s.t < t_end - 1e-9;
+      if (after_impact) {
+        impacts_seen = contact->counters().impacts;
+        EXPECT_NE(guess, nullptr) << "t " << s.t;
+        if (guess) {
+          EXPECT_TRUE(guess->q.size() == whole_trial.size() && guess->q == whole_trial)
+              << "t " << s.t;
+          State copy = s;
+          const StepStats p = spare->solve_substep(copy, h, targets, nullptr);
+          EXPECT_TRUE(p.converged);
+          from_predictor += p.iterations;
+        }
+      }
+      const StepStats r = em->solve_substep(s, h, targets, guess);
+      if (r.converged && std::abs(s.t - t_end) <= 1e-12) whole_trial = s.q;
+      if (after_impact && guess) {
+        from_trial += r.iterations;
+        ++checked;
+      }
+      return r;
+    }
+    Vec inverse_mass(const Vec& f) const override { return em->inverse_mass(f); }
+    Vec end_rate() override { return em->end_rate(); }
+  } rec;
+  ContactStepper contact(system, settings.newton.tolerance, ImpactTreatment::Locate);
+  rec.em = em;
+  rec.spare = em_spare;
+  rec.contact = &contact;
+  State state = initial_state(system);
+  for (int k = 0; k < 150; ++k) {
+    const double dt = 0.01;
+    rec.t_end = state.t + dt;
+    for (const auto& set : system.unilateral()) set->prepare(state.q, state.v, dt);
+    ASSERT_TRUE(contact.step(rec, state, dt).converged) << k;
+  }
+  std::printf(
+      "%ld sub-steps after a located impact: %ld Newton iterations from the whole "
+      "trial, %ld from the predictor\n",
+      rec.checked, rec.from_trial, rec.from_predictor);
+  EXPECT_GE(rec.checked, 5);
+  EXPECT_LT(rec.from_trial, rec.from_predictor);
+}
+
 }  // namespace
 }  // namespace emdae
