@@ -76,8 +76,12 @@ struct NewtonSettings {
   int jacobian_reuse = kAutoReuse;
   double reuse_contraction = 0.1;
   // A chord step that starts a solve (solve(..., same_structure)) is kept
-  // where it cuts the scaled residual by this factor or more.
+  // where it cuts the scaled residual by this factor or more; more follow
+  // while each does, until the residual is below chord_handoff times the
+  // tolerance (Newton's method from there), at most max_chord_steps.
   double chord_contraction = 0.1;
+  double chord_handoff = 1e4;
+  int max_chord_steps = 8;
   double reuse_flops_per_unknown = 3e3;
 };
 
@@ -128,17 +132,16 @@ class NewtonSolver {
   /// `same_structure`: the caller knows that the last solve's Jacobian is
   /// one of this problem's (the same unknowns and the same step length, only
   /// the start moved on). Unless jacobian_reuse is 1, the solve may then
-  /// start with a chord step: x - J_last^-1 F(x) with the factorization
-  /// already at hand, kept where it cuts the residual by chord_contraction
-  /// or more, before the iterations with fresh Jacobians (it counts as an
-  /// iteration). Where the step's nonlinearity, not its Jacobian, limits
-  /// the first iteration, that step does about what Newton's would, at the
-  /// cost of a residual and a solve: no assembly of a Jacobian, no
-  /// factorization. Whether the chord steps save Jacobians is measured
-  /// over windows of such solves, with and without, and the better way is
-  /// taken (counts only: runs are reproducible). A solve that fails after a
-  /// chord step is repeated by Newton's method from x. (docs/performance.md
-  /// §18.)
+  /// start with chord steps: x - J_last^-1 F(x) with the factorization
+  /// already at hand, each kept where it cuts the residual by
+  /// chord_contraction or more, down to chord_handoff times the tolerance,
+  /// before the iterations with fresh Jacobians (each counts as an
+  /// iteration; the last iteration is always Newton's). Where the step's nonlinearity, not its
+  /// Jacobian, limits the first iteration, that step does about what Newton's would, at the cost of
+  /// a residual and a solve: no assembly of a Jacobian, no factorization. Whether the chord steps
+  /// save Jacobians is measured over windows of such solves, with and without, and the better way
+  /// is taken (counts only: runs are reproducible). A solve that fails after a chord step is
+  /// repeated by Newton's method from x. (docs/performance.md §18.)
   NewtonResult solve(NewtonProblem& problem, Vec& x, const Vec& residual_scale,
                      bool same_structure = false);
   /// The residual at x, if it meets the tolerance (max_i |s_i F_i|) and the

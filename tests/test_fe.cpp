@@ -1284,6 +1284,80 @@ TEST(NewtonSolve, ReturningToASizeKeepsItsAnalysis) {
   EXPECT_EQ(c.factorizations, 3);  // the returns refactor on the kept pivots
 }
 
+// After a kept chord step more follow on the same factorization while each
+// cuts the residual tenfold, down to chord_handoff (1e4) times the
+// tolerance; Newton's method takes the solve from there. So every solve
+// ends with a fresh Jacobian and a residual far below the tolerance (chord
+// steps alone converge linearly and end just below it). A tridiagonal
+// problem with a cubic term whose load moves by 5 % from solve to solve,
+// each solve from the last one's solution: the solves take up to three
+// chord steps and one Jacobian each, fewer Jacobians than with one chord
+// step a solve (max_chord_steps = 1, as before 2026-11-28).
+TEST(NewtonSolve, ChordStepsGoOnToTheHandoffAndNewtonsMethodEndsTheSolve) {
+  class Loaded : public NewtonProblem {
+   public:
+    int n = 40;
+    double load = 1.0;
+    long jacobians = 0;
+    int size() const override { return n; }
+    // 4 x_i - x_i-1 - x_i+1 + x_i^3 = load
+    void residual(const Vec& x, Vec& f) override {
+      f.resize(n);
+      for (int i = 0; i < n; ++i)
+        f[i] = 4.0 * x[i] - (i > 0 ? x[i - 1] : 0.0) - (i + 1 < n ? x[i + 1] : 0.0) +
+               x[i] * x[i] * x[i] - load;
+    }
+    void jacobian(const Vec& x, SparseMatrix& j) override {
+      ++jacobians;
+      std::vector<Eigen::Triplet<double, SparseMatrix::StorageIndex>> t;
+      for (int i = 0; i < n; ++i) {
+        t.emplace_back(i, i, 4.0 + 3.0 * x[i] * x[i]);
+        if (i > 0) t.emplace_back(i, i - 1, -1.0);
+        if (i + 1 < n) t.emplace_back(i, i + 1, -1.0);
+      }
+      j.resize(n, n);
+      j.setFromTriplets(t.begin(), t.end());
+      j.makeCompressed();
+    }
+  };
+  const double tol = 1e-10;
+  std::vector<long> jacobians;
+  for (const int max_chords : {NewtonSettings{}.max_chord_steps, 1}) {
+    Loaded problem;
+    NewtonSettings settings{tol, 25, false};
+    settings.max_chord_steps = max_chords;
+    NewtonSolver newton(settings);
+    const Vec scale = Vec::Ones(problem.n);
+    Vec x = Vec::Zero(problem.n);
+    ASSERT_TRUE(newton.solve(problem, x, scale).converged);
+    long chords = 0, most_chords = 0, without_jacobian = 0;
+    double largest_end = 0.0;
+    for (int k = 1; k <= 10; ++k) {
+      problem.load = 1.0 + 0.05 * k;
+      const long c0 = newton.chord_steps(), j0 = problem.jacobians;
+      const NewtonResult r = newton.solve(problem, x, scale, true);
+      ASSERT_TRUE(r.converged) << k << ": " << r.message;
+      chords += newton.chord_steps() - c0;
+      most_chords = std::max(most_chords, newton.chord_steps() - c0);
+      without_jacobian += problem.jacobians == j0 ? 1 : 0;
+      Vec f;
+      problem.residual(x, f);
+      largest_end = std::max(largest_end, f.cwiseAbs().maxCoeff());
+    }
+    jacobians.push_back(problem.jacobians);
+    std::printf(
+        "max_chord_steps %d: %ld chord steps in 10 solves (at most %ld in one), %ld "
+        "Jacobians in all, %ld solves without one, largest final residual %.1e\n",
+        max_chords, chords, most_chords, problem.jacobians, without_jacobian, largest_end);
+    EXPECT_EQ(without_jacobian, 0);      // Newton's method ends every solve
+    EXPECT_LE(largest_end, 1e-3 * tol);  // and lands far below the tolerance
+    if (max_chords > 1) {
+      EXPECT_GE(most_chords, 2);  // chord steps after the first
+    }
+  }
+  EXPECT_LT(jacobians[0], jacobians[1]);
+}
+
 // Auto chooses by fill, not by size: with the threshold at 5e3 estimated
 // flops per unknown, a 50 x 50 square block (5 202 dofs, 7.2e3 flops per
 // unknown by KLU's analysis) goes to UMFPACK and a thin ring of 400 x 10
