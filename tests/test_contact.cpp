@@ -654,6 +654,25 @@ INSTANTIATE_TEST_SUITE_P(Cases, RingImpactHard,
                            return std::string(p.param.name);
                          });
 
+// After a solve of length h from `start`: its end rate (SubstepScheme::
+// end_rate), the central differences of two more solves at h -+ 1e-4 h,
+// and the end velocity.
+struct EndRateCheck {
+  Vec rate, central, v;
+};
+EndRateCheck end_rate_and_central_differences(SubstepScheme& sub, const State& start, double h) {
+  EndRateCheck c;
+  State mid = start, lo = start, hi = start;
+  EXPECT_TRUE(sub.solve_substep(mid, h, Vec(), nullptr).converged);
+  c.rate = sub.end_rate();
+  c.v = mid.v;
+  const double dh = 1e-4 * h;
+  EXPECT_TRUE(sub.solve_substep(lo, h - dh, Vec(), nullptr).converged);
+  EXPECT_TRUE(sub.solve_substep(hi, h + dh, Vec(), nullptr).converged);
+  c.central = (hi.q - lo.q) / (2 * dh);
+  return c;
+}
+
 // SubstepScheme::end_rate: d q_1 / d h of a sub-step's solution by the
 // implicit function theorem on the solve's last Jacobian, against central
 // differences of two more solves, on a pendulum (a link and a weight: the
@@ -670,20 +689,13 @@ TEST(ImpactLocation, EndRateIsTheSolutionsDerivativeInTheStepLength) {
     auto* sub = dynamic_cast<SubstepScheme*>(stepper.get());
     ASSERT_NE(sub, nullptr);
     for (double h : {0.3, 0.05}) {
-      const State start = initial_state(s);
-      State mid = start, lo = start, hi = start;
-      ASSERT_TRUE(sub->solve_substep(mid, h, Vec(), nullptr).converged);
-      const Vec rate = sub->end_rate();
-      ASSERT_EQ(rate.size(), 2) << scheme;
-      const double dh = 1e-4 * h;
-      ASSERT_TRUE(sub->solve_substep(lo, h - dh, Vec(), nullptr).converged);
-      ASSERT_TRUE(sub->solve_substep(hi, h + dh, Vec(), nullptr).converged);
-      const Vec central = (hi.q - lo.q) / (2 * dh);
+      const EndRateCheck c = end_rate_and_central_differences(*sub, initial_state(s), h);
+      ASSERT_EQ(c.rate.size(), 2) << scheme;
       std::printf("%s h = %.2f: end rate (%.12f, %.12f), central differences (%.12f, %.12f)\n",
-                  scheme, h, rate[0], rate[1], central[0], central[1]);
-      EXPECT_LE((rate - central).norm(), 1e-7 * central.norm()) << scheme << " h " << h;
+                  scheme, h, c.rate[0], c.rate[1], c.central[0], c.central[1]);
+      EXPECT_LE((c.rate - c.central).norm(), 1e-7 * c.central.norm()) << scheme << " h " << h;
       // Not the end velocity: q_1(h) is not a trajectory.
-      EXPECT_GT((rate - mid.v).norm(), 1e-4 * mid.v.norm()) << scheme << " h " << h;
+      EXPECT_GT((c.rate - c.v).norm(), 1e-4 * c.v.norm()) << scheme << " h " << h;
     }
   }
 }
@@ -718,18 +730,11 @@ TEST(ImpactLocation, EndRateKeepsTheSolvesPotentialForcesOnlyWhereTheyDoNotDepen
       auto stepper = make_stepper(scheme, s, SchemeSettings(NewtonSettings{1e-14, 30, false}));
       auto* sub = dynamic_cast<SubstepScheme*>(stepper.get());
       ASSERT_NE(sub, nullptr);
-      const double h = 0.2;
       State start = initial_state(s);
       start.t = 0.4;
-      State mid = start, lo = start, hi = start;
-      ASSERT_TRUE(sub->solve_substep(mid, h, Vec(), nullptr).converged);
-      const Vec rate = sub->end_rate();
-      ASSERT_EQ(rate.size(), 4) << scheme;
-      const double dh = 1e-4 * h;
-      ASSERT_TRUE(sub->solve_substep(lo, h - dh, Vec(), nullptr).converged);
-      ASSERT_TRUE(sub->solve_substep(hi, h + dh, Vec(), nullptr).converged);
-      const Vec central = (hi.q - lo.q) / (2 * dh);
-      EXPECT_LE((rate - central).norm(), 1e-7 * central.norm())
+      const EndRateCheck c = end_rate_and_central_differences(*sub, start, 0.2);
+      ASSERT_EQ(c.rate.size(), 4) << scheme;
+      EXPECT_LE((c.rate - c.central).norm(), 1e-7 * c.central.norm())
           << scheme << (timed ? " with the timed pull" : "");
     }
   }
@@ -743,10 +748,17 @@ TEST(ImpactLocation, EndRateKeepsTheSolvesPotentialForcesOnlyWhereTheyDoNotDepen
 // trials per located impact and 6.2 Newton iterations in all; with the
 // bodies' velocities in the rates' place it took 5.4 and 10.0 (and 5.0 and
 // 8.8 on the paper's ring impact, docs/performance.md §9).
-TEST(ImpactLocation, FewTrialsPerImpact) {
-  const RingImpact scene = ring_impact(0.5, 10.0, 4.0);
+// em with impact location at Newton tolerance 1e-11, for the off-centre
+// ring impact ring_impact(0.5, 10.0, 4.0) of the location tests.
+SchemeSettings locating_settings() {
   SchemeSettings settings(NewtonSettings{1e-11, 25, false});
   settings.contact.impact = ImpactTreatment::Locate;
+  return settings;
+}
+
+TEST(ImpactLocation, FewTrialsPerImpact) {
+  const RingImpact scene = ring_impact(0.5, 10.0, 4.0);
+  const SchemeSettings settings = locating_settings();
   const System& system = scene.model->system();
   auto stepper = make_stepper("em", system, settings);
   auto* em = dynamic_cast<MidpointFamilyStepper*>(stepper.get());
@@ -771,8 +783,7 @@ TEST(ImpactLocation, FewTrialsPerImpact) {
 // start) it takes more Newton iterations, summed over the impacts.
 TEST(ImpactLocation, TheSubstepAfterAnImpactStartsFromTheWholeTrial) {
   const RingImpact scene = ring_impact(0.5, 10.0, 4.0);
-  SchemeSettings settings(NewtonSettings{1e-11, 25, false});
-  settings.contact.impact = ImpactTreatment::Locate;
+  const SchemeSettings settings = locating_settings();
   const System& system = scene.model->system();
   auto stepper = make_stepper("em", system, settings);
   auto* em = dynamic_cast<MidpointFamilyStepper*>(stepper.get());

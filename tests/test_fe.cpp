@@ -1242,31 +1242,35 @@ TEST(NewtonSolve, ASolveThatFailsAfterAChordStepIsRepeatedByNewtonsMethod) {
 // pattern it had, KLU refactors on its kept analysis and pivot order
 // instead of analysing and factoring afresh. Sizes 40, 41, 40, 41, 42, 40:
 // three analyses (one per size), not six, and every solve exact.
+// (4 + shift) x_i - x_i-1 - x_i+1 + cubic x_i^3 = load, counting its Jacobians.
+class CubicTridiagonal : public NewtonProblem {
+ public:
+  int n = 40;
+  double shift = 0.0, cubic = 0.1, load = 1.0;
+  long jacobians = 0;
+  int size() const override { return n; }
+  void residual(const Vec& x, Vec& f) override {
+    f.resize(n);
+    for (int i = 0; i < n; ++i)
+      f[i] = (4.0 + shift) * x[i] - (i > 0 ? x[i - 1] : 0.0) - (i + 1 < n ? x[i + 1] : 0.0) +
+             cubic * x[i] * x[i] * x[i] - load;
+  }
+  void jacobian(const Vec& x, SparseMatrix& j) override {
+    ++jacobians;
+    std::vector<Eigen::Triplet<double, SparseMatrix::StorageIndex>> t;
+    for (int i = 0; i < n; ++i) {
+      t.emplace_back(i, i, 4.0 + shift + 3.0 * cubic * x[i] * x[i]);
+      if (i > 0) t.emplace_back(i, i - 1, -1.0);
+      if (i + 1 < n) t.emplace_back(i, i + 1, -1.0);
+    }
+    j.resize(n, n);
+    j.setFromTriplets(t.begin(), t.end());
+    j.makeCompressed();
+  }
+};
+
 TEST(NewtonSolve, ReturningToASizeKeepsItsAnalysis) {
-  class Tridiagonal : public NewtonProblem {
-   public:
-    int n = 40;
-    double shift = 0.0;
-    int size() const override { return n; }
-    // (4 + shift) x_i - x_i-1 - x_i+1 + 0.1 x_i^3 = 1
-    void residual(const Vec& x, Vec& f) override {
-      f.resize(n);
-      for (int i = 0; i < n; ++i)
-        f[i] = (4.0 + shift) * x[i] - (i > 0 ? x[i - 1] : 0.0) - (i + 1 < n ? x[i + 1] : 0.0) +
-               0.1 * x[i] * x[i] * x[i] - 1.0;
-    }
-    void jacobian(const Vec& x, SparseMatrix& j) override {
-      std::vector<Eigen::Triplet<double, SparseMatrix::StorageIndex>> t;
-      for (int i = 0; i < n; ++i) {
-        t.emplace_back(i, i, 4.0 + shift + 0.3 * x[i] * x[i]);
-        if (i > 0) t.emplace_back(i, i - 1, -1.0);
-        if (i + 1 < n) t.emplace_back(i, i + 1, -1.0);
-      }
-      j.resize(n, n);
-      j.setFromTriplets(t.begin(), t.end());
-      j.makeCompressed();
-    }
-  } problem;
+  CubicTridiagonal problem;
   NewtonSolver newton(NewtonSettings{1e-12, 25, false});
   int k = 0;
   for (const int n : {40, 41, 40, 41, 42, 40}) {
@@ -1289,41 +1293,16 @@ TEST(NewtonSolve, ReturningToASizeKeepsItsAnalysis) {
 // tolerance; Newton's method takes the solve from there. So every solve
 // ends with a fresh Jacobian and a residual far below the tolerance (chord
 // steps alone converge linearly and end just below it). A tridiagonal
-// problem with a cubic term whose load moves by 5 % from solve to solve,
+// problem with a cubic term (cubic = 1) whose load moves by 5 % from solve to solve,
 // each solve from the last one's solution: the solves take up to three
 // chord steps and one Jacobian each, fewer Jacobians than with one chord
 // step a solve (max_chord_steps = 1, as before 2026-11-28).
 TEST(NewtonSolve, ChordStepsGoOnToTheHandoffAndNewtonsMethodEndsTheSolve) {
-  class Loaded : public NewtonProblem {
-   public:
-    int n = 40;
-    double load = 1.0;
-    long jacobians = 0;
-    int size() const override { return n; }
-    // 4 x_i - x_i-1 - x_i+1 + x_i^3 = load
-    void residual(const Vec& x, Vec& f) override {
-      f.resize(n);
-      for (int i = 0; i < n; ++i)
-        f[i] = 4.0 * x[i] - (i > 0 ? x[i - 1] : 0.0) - (i + 1 < n ? x[i + 1] : 0.0) +
-               x[i] * x[i] * x[i] - load;
-    }
-    void jacobian(const Vec& x, SparseMatrix& j) override {
-      ++jacobians;
-      std::vector<Eigen::Triplet<double, SparseMatrix::StorageIndex>> t;
-      for (int i = 0; i < n; ++i) {
-        t.emplace_back(i, i, 4.0 + 3.0 * x[i] * x[i]);
-        if (i > 0) t.emplace_back(i, i - 1, -1.0);
-        if (i + 1 < n) t.emplace_back(i, i + 1, -1.0);
-      }
-      j.resize(n, n);
-      j.setFromTriplets(t.begin(), t.end());
-      j.makeCompressed();
-    }
-  };
   const double tol = 1e-10;
   std::vector<long> jacobians;
   for (const int max_chords : {NewtonSettings{}.max_chord_steps, 1}) {
-    Loaded problem;
+    CubicTridiagonal problem;
+    problem.cubic = 1.0;
     NewtonSettings settings{tol, 25, false};
     settings.max_chord_steps = max_chords;
     NewtonSolver newton(settings);
