@@ -318,7 +318,7 @@ KluSolver::Counters NewtonSolver::klu_counters() const {
 }
 
 NewtonResult NewtonSolver::solve(NewtonProblem& problem, Vec& x, const Vec& residual_scale,
-                                 bool same_structure) {
+                                 bool same_structure, const std::vector<Eigen::Index>* from_last) {
   Impl& m = *impl_;
   const int n = problem.size();
   if (x.size() != n || residual_scale.size() != n)
@@ -335,7 +335,53 @@ NewtonResult NewtonSolver::solve(NewtonProblem& problem, Vec& x, const Vec& resi
     --m.chord_skip;
     chord = false;
   }
-  if (chord) {
+  // A solve that releases one unknown of the last (from_last, see the
+  // header): chord steps with the last factorization, the released
+  // unknown's row replaced by x_k = 0 (Sherman-Morrison: with z = J^-1 e_k
+  // and w = e_k - J^T e_k, (J + e_k w^T)^-1 b = y - z (w . y) / (1 + w . z),
+  // y = J^-1 b; one more solve, once). Other unknowns keep their places
+  // through the map.
+  Eigen::Index released = -1;
+  Vec z_released, w_released;
+  double denominator = 0.0;
+  if (!eligible && from_last && settings_.jacobian_reuse != 1 && m.factored_last_solve &&
+      m.n == n + 1 && static_cast<int>(from_last->size()) == n && m.jac.rows() == m.n) {
+    std::vector<bool> kept(static_cast<std::size_t>(m.n), false);
+    bool one_to_one = true;
+    for (const Eigen::Index i : *from_last) {
+      if (i < 0 || i >= m.n || kept[static_cast<std::size_t>(i)]) {
+        one_to_one = false;
+        break;
+      }
+      kept[static_cast<std::size_t>(i)] = true;
+    }
+    for (Eigen::Index k = 0; one_to_one && k < m.n; ++k)
+      if (!kept[static_cast<std::size_t>(k)]) released = k;
+    if (released >= 0) {
+      w_released = Vec::Zero(m.n);
+      w_released[released] = 1.0;
+      for (Eigen::Index c = 0; c < m.jac.outerSize(); ++c)
+        for (SparseMatrix::InnerIterator it(m.jac, c); it; ++it)
+          if (it.row() == released) w_released[c] -= it.value();
+      Vec e = Vec::Zero(m.n);
+      e[released] = 1.0;
+      if (solve_with_last_jacobian(e, z_released)) denominator = 1.0 + w_released.dot(z_released);
+      if (!(std::abs(denominator) > 1e-12)) released = -1;
+    }
+  }
+  const bool release_chord = released >= 0;
+  // The chord direction d = -J_last^-1 f (or the released one's).
+  const auto direction = [&](const Vec& f, Vec& d) {
+    if (!release_chord) return solve_with_last_jacobian(-f, d);
+    Vec b = Vec::Zero(m.n), y;
+    for (int i = 0; i < n; ++i) b[(*from_last)[static_cast<std::size_t>(i)]] = -f[i];
+    if (!solve_with_last_jacobian(b, y)) return false;
+    const Vec full = y - z_released * (w_released.dot(y) / denominator);
+    d.resize(n);
+    for (int i = 0; i < n; ++i) d[i] = full[(*from_last)[static_cast<std::size_t>(i)]];
+    return d.allFinite();
+  };
+  if (chord || release_chord) {
     // Chord steps while each cuts the residual by chord_contraction, until
     // it is below chord_handoff times the tolerance: from there one Newton
     // iteration lands at round-off. (Chord steps alone to the tolerance
@@ -349,7 +395,7 @@ NewtonResult NewtonSolver::solve(NewtonProblem& problem, Vec& x, const Vec& resi
     Vec xc = x, d, x1, f1;
     bool first_rejected = false;
     while (r > settings_.tolerance && (chords == 0 || r > handoff) &&
-           chords < settings_.max_chord_steps && solve_with_last_jacobian(-f, d)) {
+           chords < settings_.max_chord_steps && direction(f, d)) {
       x1 = xc + d;
       problem.residual(x1, f1);
       if (!f1.allFinite() || !(scaled_max(f1, residual_scale) <= settings_.chord_contraction * r)) {
@@ -366,7 +412,7 @@ NewtonResult NewtonSolver::solve(NewtonProblem& problem, Vec& x, const Vec& resi
       x = std::move(xc);
       m.chord_steps += chords;
       m.chord_backoff = 1;
-    } else if (first_rejected) {
+    } else if (first_rejected && !release_chord) {
       m.chord_skip = m.chord_backoff;
       m.chord_backoff = std::min(2 * m.chord_backoff, Impl::kMaxChordBackoff);
     }

@@ -107,6 +107,25 @@ class SolveStructure {
     h_ = h;
     return same;
   }
+  /// Whether (active, h) is the one noted last with one contact released
+  /// (the same step length): then from_last maps each unknown (n_fixed
+  /// positions and velocities or positions and the system's multipliers,
+  /// then one multiplier per active contact) to its index in the last
+  /// solve's (NewtonSolver::solve's from_last). Notes nothing.
+  bool releases_one(const std::vector<int>& active, double h, Eigen::Index n_fixed,
+                    std::vector<Eigen::Index>& from_last) const {
+    if (!valid_ || std::abs(h_ - h) > 1e-6 * h || active.size() + 1 != active_.size())
+      return false;
+    from_last.resize(static_cast<std::size_t>(n_fixed) + active.size());
+    for (Eigen::Index i = 0; i < n_fixed; ++i) from_last[static_cast<std::size_t>(i)] = i;
+    std::size_t j = 0;  // active is active_ without one entry, in the same order
+    for (std::size_t k = 0; k < active.size(); ++k, ++j) {
+      if (active_[j] != active[k]) ++j;
+      if (j >= active_.size() || active_[j] != active[k]) return false;
+      from_last[static_cast<std::size_t>(n_fixed) + k] = n_fixed + static_cast<Eigen::Index>(j);
+    }
+    return true;
+  }
   /// The next solve has no structure to share (a fresh start).
   void forget() { valid_ = false; }
 
@@ -142,8 +161,15 @@ class NewtonSolver {
   /// save Jacobians is measured over windows of such solves, with and without, and the better way
   /// is taken (counts only: runs are reproducible). A solve that fails after a chord step is
   /// repeated by Newton's method from x. (docs/performance.md §18.)
+  ///
+  /// `from_last`: this problem's unknowns are the last solve's but one,
+  /// released (a contact released, the same step length), and from_last[i]
+  /// is unknown i's index among the last solve's. Unless jacobian_reuse is
+  /// 1, the solve then starts with the same chord steps, on the last
+  /// factorization with the released unknown's row replaced by x_k = 0.
   NewtonResult solve(NewtonProblem& problem, Vec& x, const Vec& residual_scale,
-                     bool same_structure = false);
+                     bool same_structure = false,
+                     const std::vector<Eigen::Index>* from_last = nullptr);
   /// The residual at x, if it meets the tolerance (max_i |s_i F_i|) and the
   /// energy and angular balances: x is accepted as the solution without an
   /// iteration (KINSOL accepts a guess only within 0.01 of the tolerance).
