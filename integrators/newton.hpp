@@ -114,8 +114,7 @@ class SolveStructure {
   /// solve's (NewtonSolver::solve's from_last). Notes nothing.
   bool releases_one(const std::vector<int>& active, double h, Eigen::Index n_fixed,
                     std::vector<Eigen::Index>& from_last) const {
-    if (!valid_ || std::abs(h_ - h) > 1e-6 * h || active.size() + 1 != active_.size())
-      return false;
+    if (!valid_ || std::abs(h_ - h) > 1e-6 * h || active.size() + 1 != active_.size()) return false;
     from_last.resize(static_cast<std::size_t>(n_fixed) + active.size());
     for (Eigen::Index i = 0; i < n_fixed; ++i) from_last[static_cast<std::size_t>(i)] = i;
     std::size_t j = 0;  // active is active_ without one entry, in the same order
