@@ -245,7 +245,7 @@ StepStats ContactStepper::substep(SubstepScheme& scheme, State& s, double h) {
   // is not (the predictor q0 + h v0 has neither; at omega h ~ 2 the
   // vibration is most of its error). On the ring impact 6 459 -> 6 175
   // Jacobians, block_drop 1 602 -> 1 528 (docs/performance.md §19).
-  if (after_impact_.valid && std::abs(after_impact_.t_end - (s.t + h)) <= 1e-9 * h) {
+  if (after_impact_.valid) {
     guess.q = after_impact_.q;
     guess_state_active = after_impact_.active;
     guess_lambda = after_impact_.lambda;
@@ -381,7 +381,6 @@ StepStats ContactStepper::substep(SubstepScheme& scheme, State& s, double h) {
     const Outcome o = locate(scheme, located, trial, h, pinned, total, at_impact);
     if (o == Outcome::Accepted) {
       after_impact_.valid = true;
-      after_impact_.t_end = s.t + h;
       after_impact_.q = trial.q;
       after_impact_.lambda = trial.lambda;
       after_impact_.active = s.active;

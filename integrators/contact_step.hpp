@@ -130,11 +130,11 @@ class ContactStepper {
   ImpactCounters counters_;
   double last_h_ = 0.0;  // length of the last accepted sub-step
   // After a located impact: the trial over the whole sub-step that found
-  // it (its end, active set and multipliers), the start of the sub-step
-  // that follows to the same end.
+  // it (its end, active set and multipliers), the start of the next
+  // sub-step, which ends where it does (the step's end). Valid until that
+  // sub-step starts, and never into another step.
   struct Pending {
     bool valid = false;
-    double t_end = 0.0;
     Vec q, lambda;
     std::vector<int> active;
   } after_impact_;

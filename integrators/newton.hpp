@@ -154,12 +154,14 @@ class NewtonSolver {
   /// already at hand, each kept where it cuts the residual by
   /// chord_contraction or more, down to chord_handoff times the tolerance,
   /// before the iterations with fresh Jacobians (each counts as an
-  /// iteration; the last iteration is always Newton's). Where the step's nonlinearity, not its
-  /// Jacobian, limits the first iteration, that step does about what Newton's would, at the cost of
-  /// a residual and a solve: no assembly of a Jacobian, no factorization. Whether the chord steps
-  /// save Jacobians is measured over windows of such solves, with and without, and the better way
-  /// is taken (counts only: runs are reproducible). A solve that fails after a chord step is
-  /// repeated by Newton's method from x. (docs/performance.md §18.)
+  /// iteration; the last iteration is always Newton's). Where the step's
+  /// nonlinearity, not its Jacobian, limits the first iteration, that step
+  /// does about what Newton's would, at the cost of a residual and a solve:
+  /// no assembly of a Jacobian, no factorization. Whether the chord steps
+  /// save Jacobians is measured over windows of such solves, with and
+  /// without, and the better way is taken (counts only: runs are
+  /// reproducible). A solve that fails after chord steps is repeated by
+  /// Newton's method from x. (docs/performance.md §18, §19.)
   ///
   /// `from_last`: this problem's unknowns are the last solve's but one,
   /// released (a contact released, the same step length), and from_last[i]
