@@ -2,8 +2,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <sstream>
 #include <stdexcept>
+#include <utility>
 
 #include "core/gradient.hpp"
 
@@ -296,24 +298,27 @@ void Q1Element::discrete_kernel(const Vec8& q0, const Vec8& q1, Vec8& grad, Mat8
       const bool small = d2 <= std::pow(kDiscreteGradientThreshold * scale, 2);
       const bool large = d2 > std::pow(kDiscreteGradientQuadratureThreshold * scale, 2);
       if (!small) {
-        double c = 0.0;
-        if (large) {
-          const double e0 = w * material_.energy(pi0), e1 = w * material_.energy(pi1);
-          c = (e1 - e0 - gm.dot(dpi)) / d2;
-        } else {
-          // gradient.cpp: int_0^{1/2} (1/2 - r) dpi^T [H(pim + r dpi) - H(pim - r dpi)] dpi dr
-          // by 3-point Gauss-Legendre.
-          static const double kX[3] = {-std::sqrt(0.6), 0.0, std::sqrt(0.6)};
-          static const double kW[3] = {5.0 / 9.0, 8.0 / 9.0, 5.0 / 9.0};
-          double numerator = 0.0;
-          for (int k = 0; k < 3; ++k) {
-            const double r = 0.25 * (1.0 + kX[k]);
-            const double dh = material_.energy_curvature(pim + r * dpi, dpi) -
-                              material_.energy_curvature(pim - r * dpi, dpi);
-            numerator += 0.25 * kW[k] * (0.5 - r) * w * dh;
-          }
-          c = numerator / d2;
+        // As gradient.cpp: the numerator of c straight from its definition
+        // for large steps, else int_0^{1/2} (1/2 - r) dpi^T [H(pim + r dpi) -
+        // H(pim - r dpi)] dpi dr by 3-point Gauss-Legendre where it has
+        // converged (quadrature_numerator), else again the definition.
+        bool direct = large;
+        double numerator = 0.0;
+        if (!large) {
+          bool converged = false;
+          numerator = quadrature_numerator(
+              [&](double r) {
+                return std::pair<double, double>(material_.energy_curvature(pim + r * dpi, dpi),
+                                                 material_.energy_curvature(pim - r * dpi, dpi));
+              },
+              w, gm.dot(dpi), converged);
+          direct = !converged;
         }
+        if (direct) {
+          const double e0 = w * material_.energy(pi0), e1 = w * material_.energy(pi1);
+          numerator = e1 - e0 - gm.dot(dpi);
+        }
+        const double c = numerator / d2;
         gt += c * dpi;
         if (jac) {
           const Eigen::Vector3d g1 = w * material_.energy_gradient(pi1);

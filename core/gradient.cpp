@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <utility>
 
 namespace emdae {
 
@@ -177,21 +178,31 @@ void discrete_gradient(const Term& term, const Vec& q0, const Vec& q1, double t0
       // (1e-11) once |dpi| ~ 1e-4 |pi|. Here the same numerator, with
       // h(r) = dpi^T [H(pi_mid + r dpi) - H(pi_mid - r dpi)] dpi, is
       //   f~(pi_1) - f~(pi_0) - grad f~(pi_mid).dpi = int_0^{1/2} (1/2 - r) h(r) dr,
-      // whose round-off is only eps |H| |dpi|^2; the error of 3-point
-      // Gauss-Legendre is O(|dpi|^7), far below round-off in this range.
-      static const double kX[3] = {-std::sqrt(0.6), 0.0, std::sqrt(0.6)};
-      static const double kW[3] = {5.0 / 9.0, 8.0 / 9.0, 5.0 / 9.0};
-      double numerator = 0.0;
-      for (int k = 0; k < 3; ++k) {
-        const double r = 0.25 * (1.0 + kX[k]);  // Gauss points mapped to [0, 1/2]
-        pi_q = pim + r * dpi;
-        const double plus = term.block_curvature(b, pi_q, tm, dpi, h_plus);
-        pi_q = pim - r * dpi;
-        const double minus = term.block_curvature(b, pi_q, tm, dpi, h_minus);
-        numerator += 0.25 * kW[k] * (0.5 - r) * (plus - minus);
+      // whose round-off is only eps |H| |dpi|^2. The error of 3-point
+      // Gauss-Legendre is O(|dpi|^7), but relative to the scale on which f~
+      // changes, not to |pi|: Neo-Hooke's derivatives grow like powers of
+      // 1 / det C, and a step that took det C from 0.03 to 0.01 at |dpi| ~
+      // 1e-2 |pi| missed the numerator by 5e-4 of it (a block lost 4e-7 of its
+      // energy). So quadrature_numerator estimates the rule's error, and
+      // where that is not small the quotient is taken: there |dpi| is no
+      // longer small against that scale, and the quotient's cancellation is
+      // small against the numerator.
+      bool converged = false;
+      const double numerator = quadrature_numerator(
+          [&](double r) {
+            pi_q = pim + r * dpi;
+            const double plus = term.block_curvature(b, pi_q, tm, dpi, h_plus);
+            pi_q = pim - r * dpi;
+            return std::pair<double, double>(plus, term.block_curvature(b, pi_q, tm, dpi, h_minus));
+          },
+          1.0, gm.dot(dpi), converged);
+      if (!converged && path == PathSmoothness::Smooth) {
+        const double f0 = term.block_value(b, ws.pi0.segment(b * m, m), tm);
+        const double f1 = term.block_value(b, ws.pi1.segment(b * m, m), tm);
+        direct = f1 - f0 - gm.dot(dpi);
       }
-      const bool shortcut_holds =
-          path == PathSmoothness::Smooth || std::abs(direct - numerator) <= kink_tolerance;
+      const bool shortcut_holds = converged && (path == PathSmoothness::Smooth ||
+                                                std::abs(direct - numerator) <= kink_tolerance);
       c = (shortcut_holds ? numerator : direct) / d2;
     }
     ws.g_tilde.segment(b * m, m) += c * dpi;

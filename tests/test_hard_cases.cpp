@@ -72,6 +72,7 @@ const std::vector<HardScene>& hard_scenes() {
       {"ring_impact_stiff", 0.0, false, false},
       {"ring_impact_large_step", 0.0, false, false},
       {"ring_impact_neo_hooke", 0.0, false, false},
+      {"blocks_squash_neo_hooke", 0.0, false, false},
       {"ring_impact_refined_5k", 0.0, false, true},
       {"ring_impact_refined_20k", 0.0, false, true},
   };
