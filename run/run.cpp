@@ -5,6 +5,8 @@
 #include <sys/file.h>
 #include <unistd.h>
 
+#include <algorithm>
+#include <cctype>
 #include <cerrno>
 #include <cmath>
 #include <cstring>
@@ -490,57 +492,171 @@ void create_output_folder(const std::string& dir) {
                                   ec ? ec.message() : "exists and is not a folder"));
 }
 
-bool is_run_output(const std::string& name) {
-  static const char* const kOwn[] = {
-      "history.csv",      "summary.json",     "report.html",  "contact.csv", "fields.pvd", "fields",
-      "trajectories.csv", "trajectories.pvd", "trajectories", "checkpoint",  ".emdae.lock"};
-  for (const char* own : kOwn)
+namespace {
+
+// "summary.json.tmp.123" (write_atomically's temporary file of a killed run)
+// is "summary.json"'s; any other name is itself.
+std::string without_temporary_suffix(const std::string& name) {
+  const auto at = name.rfind(".tmp.");
+  if (at == std::string::npos || at == 0 || at + 5 == name.size()) return name;
+  for (std::size_t i = at + 5; i < name.size(); ++i)
+    if (!std::isdigit(static_cast<unsigned char>(name[i]))) return name;
+  return name.substr(0, at);
+}
+
+// "step_0000010.vtu": a VTU piece (".vtu") or a trajectory point file (".vtp").
+bool is_step_file(const std::string& name, const std::string& ext) {
+  const std::size_t digits = name.size() - std::min(name.size(), 5 + ext.size());
+  if (digits < 7 || name.rfind("step_", 0) != 0 ||
+      name.compare(name.size() - ext.size(), ext.size(), ext) != 0)
+    return false;
+  for (std::size_t i = 5; i < 5 + digits; ++i)
+    if (!std::isdigit(static_cast<unsigned char>(name[i]))) return false;
+  return true;
+}
+
+// The files a run writes at the top of its folder, and its subfolders.
+const char* const kOwnFiles[] = {"history.csv",     "summary.json", "report.html",
+                                 "contact.csv",     "fields.pvd",   "trajectories.csv",
+                                 "trajectories.pvd"};
+const char* const kOwnFolders[] = {"fields", "trajectories", "checkpoint"};
+
+bool is_own_file(const std::string& name) {
+  for (const char* own : kOwnFiles)
     if (name == own) return true;
-  // write_atomically's temporary files ("summary.json.tmp.123") of a killed run.
-  return name.find(".tmp.") != std::string::npos;
+  return false;
+}
+
+bool is_own_folder(const std::string& name) {
+  for (const char* own : kOwnFolders)
+    if (name == own) return true;
+  return false;
+}
+
+// A file a run writes into its subfolder `folder`.
+bool is_own_file_in(const std::string& folder, const std::string& file) {
+  const std::string name = without_temporary_suffix(file);
+  if (folder == "fields") return is_step_file(name, ".vtu");
+  if (folder == "trajectories") return is_step_file(name, ".vtp");
+  return name == "state.bin" || name == "run.json";  // checkpoint/
+}
+
+// An output folder's entries: an earlier run's files and subfolders, and the
+// first entry (at any depth) that no run wrote. Only regular files count as
+// a run's: a link or a folder at one of its names is someone else's.
+struct FolderContents {
+  std::vector<fs::path> own_files, own_folders;
+  std::string foreign;          // relative to the folder, "" when none
+  bool foreign_in_way = false;  // it has the name of a file or folder a run writes
+};
+
+FolderContents folder_contents(const fs::path& dir) {
+  FolderContents c;
+  const auto note_foreign = [&c](const std::string& name, bool in_way) {
+    if (c.foreign.empty() || (in_way && !c.foreign_in_way)) {
+      c.foreign = name;
+      c.foreign_in_way = in_way;
+    }
+  };
+  std::error_code ec;
+  for (const auto& e : fs::directory_iterator(dir, ec)) {
+    const std::string name = e.path().filename().string();
+    if (name == ".emdae.lock") continue;
+    const auto type = e.symlink_status().type();
+    if (type == fs::file_type::regular && is_own_file(without_temporary_suffix(name))) {
+      c.own_files.push_back(e.path());
+    } else if (type == fs::file_type::directory && is_own_folder(name)) {
+      c.own_folders.push_back(e.path());
+      for (const auto& f : fs::directory_iterator(e.path(), ec)) {
+        const std::string file = f.path().filename().string();
+        if (f.symlink_status().type() == fs::file_type::regular && is_own_file_in(name, file))
+          c.own_files.push_back(f.path());
+        else
+          note_foreign(name + "/" + file, false);
+      }
+    } else {
+      note_foreign(name, is_own_file(name) || is_own_folder(name));
+    }
+  }
+  if (ec)
+    throw OutputError(
+        fmt::format("cannot read output folder '{}': {}", dir.string(), ec.message()));
+  return c;
+}
+
+// Why a run may not write into `dir` holding `c`, or "".
+std::string foreign_refusal(const std::string& dir, const FolderContents& c, bool force) {
+  if (c.foreign.empty()) return {};
+  if (c.foreign_in_way)
+    return fmt::format(
+        "output folder '{}' holds '{}', which an emdae run did not write and would write over "
+        "(even with --force); move it away, or give another --out",
+        dir, c.foreign);
+  if (force) return {};
+  return fmt::format(
+      "output folder '{}' holds '{}', which an emdae run did not write; give another --out, "
+      "or --force to run there anyway (emdae's own files are replaced, others kept)",
+      dir, c.foreign);
+}
+
+}  // namespace
+
+bool is_run_output(const std::string& name) {
+  return name == ".emdae.lock" || is_own_file(without_temporary_suffix(name)) ||
+         is_own_folder(name);
 }
 
 OutputFolder::OutputFolder(const std::string& dir, bool force, bool clean) {
+  // What is refused is refused before anything is made: no folder, no lock
+  // file (an existing folder is looked at again under the lock, below).
+  if (clean && fs::is_directory(dir))
+    if (const std::string why = foreign_refusal(dir, folder_contents(dir), force); !why.empty())
+      throw OutputError(why);
+  const bool made = !fs::exists(dir);
   create_output_folder(dir);
   const std::string lock = (fs::path(dir) / ".emdae.lock").string();
+  const bool had_lock = fs::exists(lock);
+  // Undoes what this constructor made, before it throws.
+  const auto give_up = [&] {
+    if (lock_fd_ >= 0) ::close(lock_fd_);
+    lock_fd_ = -1;
+    std::error_code ec;
+    if (!had_lock) fs::remove(lock, ec);
+    if (made) fs::remove(dir, ec);
+  };
   lock_fd_ = ::open(lock.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
-  if (lock_fd_ < 0)
-    throw OutputError(fmt::format("cannot lock output folder '{}': {}", dir, std::strerror(errno)));
+  if (lock_fd_ < 0) {
+    const int why = errno;
+    give_up();
+    throw OutputError(fmt::format("cannot lock output folder '{}': {}", dir, std::strerror(why)));
+  }
   if (::flock(lock_fd_, LOCK_EX | LOCK_NB) != 0) {
     const int why = errno;
     ::close(lock_fd_);
-    lock_fd_ = -1;
+    lock_fd_ = -1;  // the lock file is the other run's: it stays
     throw OutputError(
         fmt::format("output folder '{}' is in use by another emdae run ({}); give another --out",
                     dir, why == EWOULDBLOCK ? "it holds .emdae.lock" : std::strerror(why)));
   }
   if (!clean) return;  // a resumed run goes on with what is there
-  // The folder is ours: an earlier run's output goes, anything else stays
-  // and needs --force (it may be the user's).
-  std::vector<fs::path> own;
-  std::string foreign;
-  for (const auto& e : fs::directory_iterator(dir)) {
-    const std::string name = e.path().filename().string();
-    if (name == ".emdae.lock") continue;
-    if (is_run_output(name))
-      own.push_back(e.path());
-    else if (foreign.empty())
-      foreign = name;
+  // The folder is ours: an earlier run's output goes, anything else (at any
+  // depth) stays and needs --force (it may be the user's).
+  const FolderContents contents = folder_contents(dir);
+  if (const std::string why = foreign_refusal(dir, contents, force); !why.empty()) {
+    give_up();
+    throw OutputError(why);
   }
-  if (!foreign.empty() && !force) {
-    ::close(lock_fd_);
-    lock_fd_ = -1;
-    throw OutputError(fmt::format(
-        "output folder '{}' holds '{}', which an emdae run did not write; give another --out, "
-        "or --force to run there anyway (emdae's own files are replaced, others kept)",
-        dir, foreign));
-  }
-  for (const auto& p : own) {
+  for (const auto& p : contents.own_files) {
     std::error_code ec;
-    fs::remove_all(p, ec);
+    fs::remove(p, ec);
     if (ec)
       throw OutputError(
           fmt::format("cannot remove the earlier run's '{}': {}", p.string(), ec.message()));
+  }
+  // A subfolder goes when nothing but the run's files was in it.
+  for (const auto& p : contents.own_folders) {
+    std::error_code ec;
+    if (fs::is_empty(p, ec)) fs::remove(p, ec);
   }
 }
 

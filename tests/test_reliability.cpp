@@ -12,6 +12,8 @@
 #include <csignal>
 #include <filesystem>
 #include <fstream>
+#include <functional>
+#include <map>
 #include <nlohmann/json.hpp>
 #include <string>
 
@@ -450,6 +452,90 @@ TEST(OutputFolder, FilesEmdaeDidNotWriteNeedForceAndAreKept) {
   EXPECT_EQ(r.code, 0) << r.output;
   EXPECT_TRUE(fs::exists(dir / "history.csv"));
   EXPECT_EQ(read_text(dir / "notes.txt"), "mine");
+}
+
+// Every file under `folder` (relative path: its size and a hash of its
+// content) and every folder (relative path with a trailing '/': ""), to see
+// that nothing changed.
+std::map<std::string, std::string> files_of(const fs::path& folder) {
+  std::map<std::string, std::string> files;
+  for (const auto& e : fs::recursive_directory_iterator(folder)) {
+    const std::string name = fs::relative(e.path(), folder).string();
+    if (e.is_directory()) {
+      files[name + "/"] = "";
+    } else {
+      const std::string content = read_text(e.path());
+      files[name] = std::to_string(content.size()) + " bytes, hash " +
+                    std::to_string(std::hash<std::string>{}(content));
+    }
+  }
+  return files;
+}
+
+void write_file(const fs::path& path, const std::string& content) {
+  fs::create_directories(path.parent_path());
+  std::ofstream(path, std::ios::binary) << content;
+}
+
+// A file emdae did not write counts as foreign wherever it is, also inside
+// the subfolders emdae writes (fields/, trajectories/, checkpoint/): refused
+// without --force, kept with it, while emdae's own earlier files go.
+TEST(OutputFolder, FilesEmdaeDidNotWriteInsideItsSubfoldersAreForeignToo) {
+  TempDir dir;
+  const std::string run = "run " + quote(example("four_particle")) + " -q --t-end 0.1 --out o";
+  write_file(dir / "o/fields/mydata.txt", "mine");
+  Result r = emdae(run, dir.path());
+  EXPECT_EQ(r.code, 2) << r.output;
+  EXPECT_TRUE(has(r.output, "holds 'fields/mydata.txt'")) << r.output;
+  EXPECT_EQ(read_text(dir / "o/fields/mydata.txt"), "mine");
+
+  // An earlier run's folder with the user's files among its own.
+  fs::remove_all(dir / "o");
+  r = emdae("run " + quote(example("patch_test")) + " -q --out o", dir.path());
+  ASSERT_EQ(r.code, 0) << r.output;
+  std::vector<fs::path> pieces;
+  for (const auto& e : fs::directory_iterator(dir / "o/fields")) pieces.push_back(e.path());
+  ASSERT_FALSE(pieces.empty());
+  write_file(dir / "o/fields/mydata.txt", "mine");
+  write_file(dir / "o/checkpoint/notes.txt", "mine too");
+  write_file(dir / "o/data.tmp.csv", "not a temporary file of emdae's");
+  const auto before = files_of(dir / "o");
+  r = emdae(run, dir.path());
+  EXPECT_EQ(r.code, 2) << r.output;
+  EXPECT_TRUE(has(r.output, "which an emdae run did not write")) << r.output;
+  EXPECT_EQ(files_of(dir / "o"), before) << "a refused run changes nothing";
+
+  r = emdae(run + " --force", dir.path());
+  ASSERT_EQ(r.code, 0) << r.output;
+  EXPECT_EQ(read_text(dir / "o/fields/mydata.txt"), "mine");
+  EXPECT_EQ(read_text(dir / "o/checkpoint/notes.txt"), "mine too");
+  EXPECT_EQ(read_text(dir / "o/data.tmp.csv"), "not a temporary file of emdae's");
+  for (const auto& p : pieces) EXPECT_FALSE(fs::exists(p)) << p;
+  EXPECT_FALSE(fs::exists(dir / "o/fields.pvd"));
+  EXPECT_EQ(read_json(dir / "o/summary.json")["scene"], "four_particle");
+
+  // Something at one of emdae's names that emdae did not write: the run
+  // would write over it, --force or not.
+  fs::remove(dir / "o/history.csv");
+  fs::create_directories(dir / "o/history.csv/mine");
+  r = emdae(run + " --force", dir.path());
+  EXPECT_EQ(r.code, 2) << r.output;
+  EXPECT_TRUE(has(r.output, "holds 'history.csv'")) << r.output;
+  EXPECT_TRUE(has(r.output, "would write over")) << r.output;
+  EXPECT_TRUE(fs::is_directory(dir / "o/history.csv/mine"));
+}
+
+// A run refused for its folder leaves no file there (no .emdae.lock), and
+// makes no folder.
+TEST(OutputFolder, ARefusedRunLeavesNoFileBehind) {
+  TempDir dir;
+  write_file(dir / "o/notes.txt", "mine");
+  const Result r =
+      emdae("run " + quote(example("four_particle")) + " -q --t-end 0.1 --out o", dir.path());
+  EXPECT_EQ(r.code, 2) << r.output;
+  std::vector<std::string> names;
+  for (const auto& e : fs::directory_iterator(dir / "o")) names.push_back(e.path().filename());
+  EXPECT_EQ(names, std::vector<std::string>{"notes.txt"});
 }
 
 TEST(OutputFolder, AKilledRunSaysItIsNotOverAndKeepsItsFieldIndex) {
