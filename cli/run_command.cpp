@@ -160,7 +160,9 @@ int resume(const RunOptions& given, std::ostream& out, std::ostream& err, RunRec
     return bad_input(err, "--resume " + given.resume_dir +
                               ": takes no scene and no option but -q (the run's own are in " +
                               given.resume_dir + "/checkpoint/run.json)");
-  const fs::path note = fs::absolute(fs::path(given.resume_dir) / "checkpoint" / "run.json");
+  // The folder given, wherever the run first wrote: it may have been moved.
+  const fs::path dir = fs::absolute(given.resume_dir);
+  const fs::path note = dir / "checkpoint" / "run.json";
   RunOptions o;
   try {
     std::ifstream in(note);
@@ -171,7 +173,7 @@ int resume(const RunOptions& given, std::ostream& out, std::ostream& err, RunRec
     o.dt = j.at("dt").get<std::string>();
     o.t_end = j.at("t_end").get<std::string>();
     o.overrides = j.at("overrides").get<std::vector<std::string>>();
-    o.out_dir = j.at("out").get<std::string>();
+    o.out_dir = dir.lexically_normal().string();
     o.checkpoint_every = j.at("checkpoint_every").get<long>();
     // Relative paths (scene, --out, meshes) as the run had them.
     std::error_code ec;

@@ -639,6 +639,29 @@ TEST(Checkpoint, KilledRunAfterAStaticPrestressResumesBitForBit) {
       "run " + quote(example("bearing")) + " --t-end 0.6 --checkpoint-every 10", 35);
 }
 
+// A finished run of a copy of four_particle with checkpoints, in `dir`/o:
+// its last checkpoint is one a resume goes on from.
+void run_with_checkpoints(const TempDir& dir, const std::string& out = "o") {
+  fs::copy_file(example("four_particle"), dir / "scene.toml", fs::copy_options::overwrite_existing);
+  const Result r =
+      emdae("run scene.toml -q --t-end 0.2 --checkpoint-every 5 --out " + out, dir.path());
+  ASSERT_EQ(r.code, 0) << r.output;
+  ASSERT_TRUE(fs::exists(dir.path() / out / "checkpoint/state.bin"));
+}
+
+// `--resume DIR` goes on in DIR, also when the folder was moved since.
+TEST(Checkpoint, AResumeWritesIntoTheFolderItIsGiven) {
+  TempDir dir;
+  run_with_checkpoints(dir, "A");
+  fs::rename(dir / "A", dir / "B");
+  fs::remove(dir / "B/report.html");
+  const Result r = emdae("run --resume B -q", dir.path());
+  EXPECT_EQ(r.code, 0) << r.output;
+  EXPECT_FALSE(fs::exists(dir / "A"));
+  EXPECT_TRUE(fs::exists(dir / "B/report.html"));
+  EXPECT_EQ(read_json(dir / "B/summary.json")["steps"], 20);
+}
+
 TEST(Checkpoint, ResumeWithoutACheckpointIsBadInput) {
   TempDir dir;
   const Result r = emdae("run --resume nowhere", dir.path());
