@@ -14,8 +14,11 @@
 #include <filesystem>
 #include <fstream>
 #include <functional>
+#include <iterator>
+#include <map>
 #include <memory>
 #include <sstream>
+#include <string_view>
 
 #include "contact/mortar_contact.hpp"
 #include "run/describe.hpp"
@@ -367,8 +370,9 @@ RunResult::End integrate_model(const std::function<std::unique_ptr<Stepper>()>& 
 // --- checkpoints --------------------------------------------------------------------
 
 // 2: with the trajectories' place; 3: with the driver's last-resort steps;
-// 4: with the linear solver's counters; 5: with its pivot-fill switches.
-constexpr const char* kCheckpointMagic = "emdae checkpoint 5";
+// 4: with the linear solver's counters; 5: with its pivot-fill switches;
+// 6: with the scene's content and a checksum of the whole file.
+constexpr const char* kCheckpointMagic = "emdae checkpoint 6";
 
 // What a checkpoint holds besides the recorder: the loop, the state, where
 // the history and the fields are.
@@ -381,6 +385,7 @@ struct Checkpoint {
   std::vector<std::pair<double, std::string>> fields_index;
   long trajectories_offset = -1, trajectories_written = -1;  // -1: none
   std::vector<std::pair<double, std::string>> trajectories_index;
+  std::string recorder_bits;  // read back: Recorder::restore's input
 };
 
 // The run a checkpoint belongs to: a resume of another scene, scheme or
@@ -395,12 +400,56 @@ std::string checkpoint_path(const std::string& dir) {
   return (fs::path(dir) / "checkpoint" / "state.bin").string();
 }
 
-void write_checkpoint(const std::string& dir, const std::string& identity, const Checkpoint& c,
+// FNV-1a, 64 bits: a checkpoint's checksum (against damage, not an attacker).
+std::uint64_t fnv1a(std::string_view bytes) {
+  std::uint64_t h = 14695981039346656037ull;
+  for (const char c : bytes) {
+    h ^= static_cast<unsigned char>(c);
+    h *= 1099511628211ull;
+  }
+  return h;
+}
+
+// The keys whose values differ between two scenes' contents ("key = value"
+// lines, RunSettings::scene_content), at most three of them named.
+std::string scene_difference(const std::string& then, const std::string& now) {
+  const auto lines = [](const std::string& text) {
+    std::map<std::string, std::string> m;
+    std::istringstream in(text);
+    for (std::string line; std::getline(in, line);) {
+      const auto eq = line.find(" = ");
+      if (eq != std::string::npos) m[line.substr(0, eq)] = line.substr(eq + 3);
+    }
+    return m;
+  };
+  const auto a = lines(then), b = lines(now);
+  std::vector<std::string> keys;
+  for (const auto& [k, v] : a)
+    if (const auto it = b.find(k); it == b.end() || it->second != v) keys.push_back(k);
+  for (const auto& [k, v] : b)
+    if (a.find(k) == a.end()) keys.push_back(k);
+  std::sort(keys.begin(), keys.end());
+  keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
+  const auto shown = [](const std::map<std::string, std::string>& m, const std::string& k) {
+    const auto it = m.find(k);
+    return it == m.end() ? std::string("none") : it->second;
+  };
+  std::string out;
+  for (std::size_t i = 0; i < keys.size() && i < 3; ++i)
+    out += fmt::format("{}{} ({} at the checkpoint, {} now)", i ? ", " : "", keys[i],
+                       shown(a, keys[i]), shown(b, keys[i]));
+  if (keys.size() > 3) out += fmt::format(" and {} more", keys.size() - 3);
+  return out.empty() ? "its text" : out;
+}
+
+void write_checkpoint(const std::string& dir, const std::string& identity,
+                      const std::string& scene_content, const Checkpoint& c,
                       const Recorder& recorder) {
   using namespace binary;
   std::ostringstream out(std::ios::binary);
   put_string(out, kCheckpointMagic);
   put_string(out, identity);
+  put_string(out, scene_content);
   put(out, c.driver.h);
   put(out, c.driver.successes_at_h);
   put(out, c.driver.steps);
@@ -426,29 +475,70 @@ void write_checkpoint(const std::string& dir, const std::string& identity, const
     put(out, t);
     put_string(out, file);
   }
-  recorder.save(out);
+  std::ostringstream bits(std::ios::binary);
+  recorder.save(bits);
+  put_string(out, bits.str());
   put_string(out, kCheckpointMagic);  // the end: a whole file
+  put(out, fnv1a(out.str()));         // and the same bits as were written
   std::error_code ec;
   fs::create_directories(fs::path(dir) / "checkpoint", ec);
   write_atomically(checkpoint_path(dir), out.str(), "checkpoint");
 }
 
+// Why the file `name` of `dir` does not reach the `offset` bytes it had at
+// the checkpoint, `lines` of them (when >= 0), or "".
+std::string short_of(const std::string& dir, const char* name, long offset, long lines) {
+  const std::string path = (fs::path(dir) / name).string();
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return fmt::format("'{}' is missing", path);
+  std::string head(static_cast<std::size_t>(offset), '\0');
+  in.read(head.data(), offset);
+  if (in.gcount() != offset)
+    return fmt::format("'{}' has {} bytes, fewer than the {} it had at the checkpoint", path,
+                       in.gcount(), offset);
+  if ((offset > 0 && head.back() != '\n') ||
+      (lines >= 0 && std::count(head.begin(), head.end(), '\n') != lines))
+    return fmt::format("'{}' was changed before the checkpoint's place (byte {})", path, offset);
+  return {};
+}
+
+// The checkpoint of `dir`, read whole and checked against the run
+// (`identity`, the scene's content, a recorder of `system`) and against the
+// files it goes on with (history.csv, trajectories.csv), before anything in
+// the folder changes; throws OutputError saying what is wrong.
 Checkpoint read_checkpoint(const std::string& dir, const std::string& identity,
-                           Recorder& recorder) {
+                           const std::string& scene_content, const System& system) {
   using namespace binary;
   const std::string path = checkpoint_path(dir);
-  std::ifstream in(path, std::ios::binary);
-  if (!in)
+  std::ifstream file(path, std::ios::binary);
+  if (!file)
     throw OutputError(
         fmt::format("cannot resume from '{}': no checkpoint ({}; run with "
                     "--checkpoint-every N to write one)",
                     dir, path));
+  const std::string bytes((std::istreambuf_iterator<char>(file)), std::istreambuf_iterator<char>());
   Checkpoint c;
   try {
-    if (get_string(in) != kCheckpointMagic) throw std::runtime_error("not an emdae checkpoint");
+    std::istringstream in(bytes, std::ios::binary);
+    const std::string magic = get_string(in);
+    if (magic != kCheckpointMagic)
+      throw std::runtime_error(
+          magic.rfind("emdae checkpoint ", 0) == 0
+              ? fmt::format("it was written by another version of emdae ('{}'; this one reads "
+                            "'{}'): run the scene again from the start",
+                            magic, kCheckpointMagic)
+              : std::string("not an emdae checkpoint"));
+    std::uint64_t sum = 0;
+    const std::size_t body = bytes.size() - std::min(bytes.size(), sizeof sum);
+    std::memcpy(&sum, bytes.data() + body, bytes.size() - body);
+    if (bytes.size() - body != sizeof sum || fnv1a(std::string_view(bytes).substr(0, body)) != sum)
+      throw std::runtime_error("it is damaged (its checksum does not match its content)");
     const std::string theirs = get_string(in);
     if (theirs != identity)
       throw std::runtime_error("it is of another run (" + theirs + "; this one: " + identity + ")");
+    if (const std::string then = get_string(in); then != scene_content)
+      throw std::runtime_error("the scene was changed since the checkpoint: " +
+                               scene_difference(then, scene_content));
     c.driver.h = get<double>(in);
     c.driver.successes_at_h = get<int>(in);
     c.driver.steps = get<long>(in);
@@ -474,11 +564,25 @@ Checkpoint read_checkpoint(const std::string& dir, const std::string& identity,
       const double t = get<double>(in);
       c.trajectories_index.emplace_back(t, get_string(in));
     }
-    recorder.restore(in);
-    if (get_string(in) != kCheckpointMagic) throw std::runtime_error("it is damaged");
+    c.recorder_bits = get_string(in);
+    {
+      // Read once here: a recorder that cannot be restored is refused
+      // before anything changes.
+      std::istringstream bits(c.recorder_bits, std::ios::binary);
+      Recorder(system, initial_state(system)).restore(bits);
+    }
+    if (get_string(in) != kCheckpointMagic || c.history_offset < 0 || c.history_rows < 0)
+      throw std::runtime_error("it is damaged");
   } catch (const std::runtime_error& e) {
     throw OutputError(fmt::format("cannot resume from '{}': {}", path, e.what()));
   }
+  // The history (header and rows) and the trajectories must reach the
+  // checkpoint's place: a resumed run goes on from there.
+  std::string problem = short_of(dir, "history.csv", c.history_offset, c.history_rows + 1);
+  if (problem.empty() && c.trajectories_offset >= 0)
+    problem = short_of(dir, "trajectories.csv", c.trajectories_offset, -1);
+  if (!problem.empty())
+    throw OutputError(fmt::format("cannot resume from '{}': {}", path, problem));
   return c;
 }
 
@@ -694,6 +798,11 @@ RunResult run(Model& model, const RunSettings& settings, RunObserver* watcher) {
   // A static analysis starts at rest (prescribed motions have no velocity).
   if (settings.static_only) state.v.setZero();
   RunInfo info = run_info(settings);
+  const std::string identity = run_identity(settings, system);
+  // A checkpoint is read and checked whole before anything in the folder
+  // changes: a resume refused leaves the interrupted run as it was.
+  std::optional<Checkpoint> resumed;
+  if (resume) resumed = read_checkpoint(dir, identity, settings.scene_content, system);
   // From the start the folder says the run is not over: a summary with
   // status "running" (a killed run leaves it so).
   if (writes) {
@@ -715,9 +824,10 @@ RunResult run(Model& model, const RunSettings& settings, RunObserver* watcher) {
   }
   Recorder recorder(system, state);
   recorder.set_load_free_test([&model](double a, double b) { return model.loads_vanish(a, b); });
-  const std::string identity = run_identity(settings, system);
-  std::optional<Checkpoint> resumed;
-  if (resume && result.finished()) resumed = read_checkpoint(dir, identity, recorder);
+  if (resumed) {
+    std::istringstream bits(resumed->recorder_bits, std::ios::binary);
+    recorder.restore(bits);
+  }
   std::unique_ptr<HistoryWriter> history;
   if (writes) {
     try {
@@ -789,7 +899,7 @@ RunResult run(Model& model, const RunSettings& settings, RunObserver* watcher) {
     c.trajectories_index = trajectories.index();
     c.cpu_seconds = info.cpu_seconds;
     c.linear_solver = info.linear_solver;
-    write_checkpoint(dir, identity, c, recorder);
+    write_checkpoint(dir, identity, settings.scene_content, c, recorder);
     if (!settings.resume_note.empty())
       write_atomically((fs::path(dir) / "checkpoint" / "run.json").string(), settings.resume_note,
                        "checkpoint's command");

@@ -93,6 +93,10 @@ struct RunSettings {
   /// What the caller needs to resume the run (the command line, as JSON),
   /// written beside each checkpoint as checkpoint/run.json.
   std::string resume_note;
+  /// The scene's keys and values after the command line's overrides, one
+  /// "key = value" a line (the scene reader's): a checkpoint records it, and
+  /// a resume of a scene changed since is refused.
+  std::string scene_content;
 };
 
 /// Watches a run: progress, interruption, what went wrong on the side.

@@ -141,6 +141,28 @@ std::string default_name(const std::string& source) {
   return out.empty() || out[0] == '.' ? "scene" : out;
 }
 
+// `node`'s keys and values, one "key = value" a line (key: its dotted path,
+// array items as [i]), in the table's order: the scene's content as a
+// checkpoint records it. Numbers keep every bit (%.17g); comments and layout
+// are not content.
+void flatten(const toml::node& node, const std::string& key, std::string& out) {
+  if (const auto* t = node.as_table()) {
+    if (t->empty()) out += key + " = {}\n";
+    for (const auto& [k, v] : *t)
+      flatten(v, key.empty() ? std::string(k.str()) : key + "." + std::string(k.str()), out);
+  } else if (const auto* a = node.as_array()) {
+    if (a->empty()) out += key + " = []\n";
+    for (std::size_t i = 0; i < a->size(); ++i)
+      flatten(*a->get(i), key + "[" + std::to_string(i) + "]", out);
+  } else if (const auto* d = node.as_floating_point()) {
+    out += fmt::format("{} = {:.17g}\n", key, d->get());
+  } else {
+    std::ostringstream value;
+    node.visit([&value](const auto& v) { value << v; });
+    out += key + " = " + value.str() + "\n";
+  }
+}
+
 }  // namespace
 
 }  // namespace scene_reader
@@ -186,6 +208,7 @@ std::unique_ptr<Scene> load_scene_text(std::string_view text, const std::string&
   for (const auto& o : overrides) scene_reader::apply_override(root, o);
 
   auto scene = std::make_unique<Scene>();
+  flatten(root, "", scene->settings.scene_content);
   scene->settings.source = source_name;
   scene->settings.name = default_name(source_name);
   Builder builder(*scene, loc);

@@ -662,6 +662,73 @@ TEST(Checkpoint, AResumeWritesIntoTheFolderItIsGiven) {
   EXPECT_EQ(read_json(dir / "B/summary.json")["steps"], 20);
 }
 
+// Resumes o after `damage` (run in `dir`): refused (exit 2) with `expected`
+// in the message, and nothing in the folder changed.
+void expect_resume_refused(const std::function<void(const TempDir&)>& damage,
+                           const std::string& expected) {
+  TempDir dir;
+  run_with_checkpoints(dir);
+  damage(dir);
+  const auto before = files_of(dir / "o");
+  const Result r = emdae("run --resume o -q", dir.path());
+  EXPECT_EQ(r.code, 2) << r.output;
+  EXPECT_TRUE(has(r.output, expected)) << "expected '" << expected << "' in\n" << r.output;
+  EXPECT_EQ(files_of(dir / "o"), before) << "a refused resume changes nothing: " << expected;
+}
+
+void truncate(const fs::path& file, double fraction) {
+  fs::resize_file(file, static_cast<std::uintmax_t>(fraction * fs::file_size(file)));
+}
+
+TEST(Checkpoint, ARefusedResumeLeavesTheFolderAsItWas) {
+  expect_resume_refused([](const TempDir& d) { truncate(d / "o/checkpoint/state.bin", 0.5); },
+                        "state.bin");
+  expect_resume_refused([](const TempDir& d) { truncate(d / "o/checkpoint/state.bin", 0.0); },
+                        "ends early");
+  expect_resume_refused([](const TempDir& d) { fs::remove(d / "o/checkpoint/state.bin"); },
+                        "no checkpoint");
+  expect_resume_refused([](const TempDir& d) { fs::remove(d / "o/history.csv"); },
+                        "history.csv' is missing");
+  // The checkpoint of another scene.
+  expect_resume_refused(
+      [](const TempDir& d) {
+        ASSERT_EQ(emdae("run " + quote(example("double_pendulum")) +
+                            " -q --t-end 0.1 --checkpoint-every 5 --out other",
+                        d.path())
+                      .code,
+                  0);
+        fs::copy_file(d / "other/checkpoint/state.bin", d / "o/checkpoint/state.bin",
+                      fs::copy_options::overwrite_existing);
+      },
+      "of another run");
+}
+
+// What a checkpoint cannot go on from: bits changed in it (a byte among the
+// recorder's counters near its end, which the reader alone cannot tell from
+// a count), a history cut short of the checkpoint's place, a scene whose
+// values were changed since (the run's name, scheme, dofs and step alike).
+TEST(Checkpoint, ADamagedCheckpointAShortHistoryOrAChangedSceneIsRefused) {
+  expect_resume_refused(
+      [](const TempDir& d) {
+        const fs::path file = d / "o/checkpoint/state.bin";
+        std::string bits = read_text(file);
+        bits[bits.size() - 44] ^= 0x01;
+        std::ofstream(file, std::ios::binary) << bits;
+      },
+      "checksum");
+  expect_resume_refused([](const TempDir& d) { truncate(d / "o/history.csv", 0.5); },
+                        "history.csv' has");
+  expect_resume_refused(
+      [](const TempDir& d) {
+        std::string scene = read_text(d / "scene.toml");
+        const auto at = scene.find("mass = 1.0");
+        ASSERT_NE(at, std::string::npos);
+        scene.replace(at, 10, "mass = 2.5");
+        std::ofstream(d / "scene.toml", std::ios::binary) << scene;
+      },
+      "particles[0].mass (1 at the checkpoint, 2.5 now)");
+}
+
 TEST(Checkpoint, ResumeWithoutACheckpointIsBadInput) {
   TempDir dir;
   const Result r = emdae("run --resume nowhere", dir.path());
