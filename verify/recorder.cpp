@@ -123,6 +123,7 @@ Recorder::Recorder(const System& system, const State& initial, ExternalWork exte
   const double j0 = q0.angular_momentum.norm();
   const double j_size = angular_momentum_scale(system, initial.q, initial.v);
   angular_scale_ = (j0 > 1e-12 * j_size) ? j0 : 0.0;
+  angular_reach_max_ = j_size;
   impulse_ = Vec::Zero(q0.linear_momentum.size());
   linear_axis_error_max_ = Vec::Zero(q0.linear_momentum.size());
   angular_impulse_ = Vec::Zero(q0.angular_momentum.size());
@@ -151,6 +152,9 @@ const Sample& Recorder::observe(const State& state, const AcceptedStep& step) {
   contact_events_ += s.contact_events;
   track_load_free(last_, s);
   track_balance(step, s);
+  if (conservation_.angular_balance)
+    angular_reach_max_ =
+        std::max(angular_reach_max_, angular_momentum_scale(system_, state.q, state.v));
   update_maxima(s);
   last_ = std::move(s);
   return last_;
@@ -299,7 +303,12 @@ std::optional<double> Recorder::linear_momentum_balance_error_max() const {
 
 std::optional<double> Recorder::angular_momentum_balance_rel_error_max() const {
   if (!conservation_.angular_balance || !impulses_known_) return std::nullopt;
-  return angular_size_max_ > 0 ? angular_balance_max_ / angular_size_max_ : angular_balance_max_;
+  return angular_balance_relative() ? angular_balance_max_ / angular_size_max_
+                                    : angular_balance_max_;
+}
+
+bool Recorder::angular_balance_relative() const {
+  return angular_size_max_ > 1e-12 * angular_reach_max_ && angular_size_max_ > 0;
 }
 
 std::string Recorder::linear_balance_note() const {
@@ -315,7 +324,8 @@ std::string Recorder::angular_balance_note() const {
   if (!impulses_known_)
     return "not available: the scheme does not report the impulses of loads "
            "and supports";
-  if (!(angular_size_max_ > 0)) return "absolute error: the angular momentum stayed zero";
+  if (!angular_balance_relative())
+    return "absolute error: the angular momentum stayed at round-off (zero)";
   return "";
 }
 
@@ -375,11 +385,11 @@ void Recorder::save(std::ostream& out) const {
   using namespace binary;
   put_sample(out, initial_);
   put_sample(out, last_);
-  for (double x :
-       {energy_scale_, balance_scale_, angular_scale_, energy_error_max_, balance_error_max_,
-        free_ref_, free_ref_scale_, free_time_, free_error_max_, linear_balance_max_,
-        angular_balance_max_, angular_size_max_, gap_violation_max_, penetration_max_,
-        contact_first_, contact_last_, linear_error_max_, angular_error_max_, constraint_max_})
+  for (double x : {energy_scale_,      balance_scale_,      angular_scale_,       energy_error_max_,
+                   balance_error_max_, free_ref_,           free_ref_scale_,      free_time_,
+                   free_error_max_,    linear_balance_max_, angular_balance_max_, angular_size_max_,
+                   angular_reach_max_, gap_violation_max_,  penetration_max_,     contact_first_,
+                   contact_last_,      linear_error_max_,   angular_error_max_,   constraint_max_})
     put(out, x);
   put(out, in_free_);
   put(out, free_intervals_);
@@ -403,10 +413,11 @@ void Recorder::restore(std::istream& in) {
   initial_ = std::move(initial);
   last_ = std::move(last);
   for (double* x :
-       {&energy_scale_, &balance_scale_, &angular_scale_, &energy_error_max_, &balance_error_max_,
-        &free_ref_, &free_ref_scale_, &free_time_, &free_error_max_, &linear_balance_max_,
-        &angular_balance_max_, &angular_size_max_, &gap_violation_max_, &penetration_max_,
-        &contact_first_, &contact_last_, &linear_error_max_, &angular_error_max_, &constraint_max_})
+       {&energy_scale_,      &balance_scale_,      &angular_scale_,       &energy_error_max_,
+        &balance_error_max_, &free_ref_,           &free_ref_scale_,      &free_time_,
+        &free_error_max_,    &linear_balance_max_, &angular_balance_max_, &angular_size_max_,
+        &angular_reach_max_, &gap_violation_max_,  &penetration_max_,     &contact_first_,
+        &contact_last_,      &linear_error_max_,   &angular_error_max_,   &constraint_max_})
     *x = get<double>(in);
   in_free_ = get<bool>(in);
   free_intervals_ = get<int>(in);

@@ -37,6 +37,9 @@
 //   linear_momentum_balance_error_max      max |L_n - L_0 - I_n|
 //   angular_momentum_balance_rel_error_max max |J_n - J_0 - A_n| / max_k |J_k|
 //
+// (absolute where max_k |J_k| stays at round-off, below 1e-12 of the largest
+// sum_A |x_A| |p_A| of the run: a symmetric scene keeps J at ~1e-17, and the
+// quotient read ~1 there)
 // are meaningful whenever the potential and constraint terms are invariant
 // (a supported bearing under a torque), provided the scheme reports the
 // impulses (em and midpoint do).
@@ -153,6 +156,9 @@ class Recorder {
   std::optional<double> angular_momentum_balance_rel_error_max() const;
   std::string linear_balance_note() const;
   std::string angular_balance_note() const;
+  /// Whether the angular balance is relative to max |J| (which stayed above
+  /// round-off) or absolute.
+  bool angular_balance_relative() const;
 
   /// Contact over the run (zero / NaN without contact or before any).
   int active_contacts_max() const { return active_max_; }
@@ -214,6 +220,10 @@ class Recorder {
   Vec impulse_, angular_impulse_;
   bool impulses_known_ = true;
   double linear_balance_max_ = 0.0, angular_balance_max_ = 0.0, angular_size_max_ = 0.0;
+  // max over the samples of sum_A |x_A| |p_A|, the size the angular momentum
+  // of a state can have: below 1e-12 of it max |J| is round-off, and the
+  // balance is reported absolute.
+  double angular_reach_max_ = 0.0;
   // Contact.
   int active_max_ = 0;
   double gap_violation_max_ = 0.0, penetration_max_ = 0.0;
