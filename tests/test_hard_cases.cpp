@@ -73,6 +73,7 @@ const std::vector<HardScene>& hard_scenes() {
       {"ring_impact_large_step", 0.0, false, false},
       {"ring_impact_neo_hooke", 0.0, false, false},
       {"blocks_squash_neo_hooke", 0.0, false, false},
+      {"slide_off_edge", 0.0, false, false},
       {"ring_impact_refined_5k", 0.0, false, true},
       {"ring_impact_refined_20k", 0.0, false, true},
   };
@@ -93,7 +94,10 @@ struct KnownFailing {
   double dt_factor, tolerance;
 };
 const std::vector<KnownFailing>& known_failing() {
-  static const std::vector<KnownFailing> cases = {};
+  // Newton stalls on a node whose mortar weight vanishes as it slides off
+  // the master face's end (the scene file says why).
+  static const std::vector<KnownFailing> cases = {{"slide_off_edge", 1.0, 1e-10},
+                                                  {"slide_off_edge", 1.0, 1e-11}};
   return cases;
 }
 
@@ -184,7 +188,8 @@ CaseRun run_case(Scene& scene, const HardCase& c, ImpactWatch& watch) {
 // Scenes under gravity: a dead-load potential, not invariant, so the
 // summary has neither the momenta nor their balances.
 bool has_gravity(const std::string& scene) {
-  return scene == "block_drop" || scene == "block_rest" || scene == "ring_rolling";
+  return scene == "block_drop" || scene == "block_rest" || scene == "ring_rolling" ||
+         scene == "slide_off_edge";
 }
 
 class HardCatalogue : public ::testing::TestWithParam<HardCase> {};
