@@ -268,9 +268,11 @@ int command_compare(const CompareOptions& options, std::ostream& out, std::ostre
   std::vector<ComparedRun> runs;
   for (std::size_t k = 0; k < schemes.size(); ++k) {
     if (codes[k] == kNotRun) continue;  // interrupted before it started
-    // Without a folder of its own the scheme never ran: files found there
-    // are an earlier comparison's.
-    runs.push_back({schemes[k], schemes[k], codes[k], records[k].message, !records[k].dir.empty()});
+    // Without a folder of its own the scheme never ran, and a run that
+    // refused (a foreign file in its folder) wrote nothing there: files
+    // found there are an earlier comparison's, not its figures.
+    runs.push_back({schemes[k], schemes[k], codes[k], records[k].message,
+                    !records[k].dir.empty() && codes[k] != kExitBadInput});
   }
 
   ReportInfo info = report_info(*scene->model, scene->settings);

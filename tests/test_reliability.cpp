@@ -425,6 +425,31 @@ TEST(OutputFolder, AStudyOrComparisonHoldsItsWholeFolder) {
   }
 }
 
+// A comparison whose scheme's run refused its folder (a file the user put
+// there) reports that run as not run: the earlier comparison's figures left
+// in that folder are not its (an outside test saw them reported as "ok",
+// "meets the tolerances").
+TEST(OutputFolder, AComparisonDoesNotReportAnEarlierRunsFiguresForARefusedOne) {
+  TempDir dir;
+  const std::string args = "compare --schemes em,midpoint --t-end 0.1 " +
+                           quote(example("four_particle")) + " -q --out o";
+  Result r = emdae(args, dir.path());
+  ASSERT_EQ(r.code, 0) << r.output;
+  ASSERT_TRUE(fs::exists(dir / "o/em/summary.json"));
+  std::ofstream(dir / "o/em/notes.txt") << "mine\n";
+  r = emdae(args, dir.path());
+  EXPECT_NE(r.code, 0) << r.output;
+  EXPECT_TRUE(has(r.output, "notes.txt")) << r.output;
+  EXPECT_TRUE(fs::exists(dir / "o/em/notes.txt"));
+  const auto runs = read_json(dir / "o/compare.json")["runs"];
+  ASSERT_EQ(runs.size(), 2u) << runs;
+  EXPECT_EQ(runs[0]["scheme"], "em");
+  EXPECT_EQ(runs[0]["exit_code"], 2) << runs[0];
+  EXPECT_FALSE(runs[0].contains("status")) << runs[0];
+  EXPECT_NE(runs[0]["verdict"], "meets the tolerances") << runs[0];
+  EXPECT_EQ(runs[1]["status"], "ok") << runs[1];  // midpoint ran, its figures are its own
+}
+
 TEST(OutputFolder, ASecondRunReplacesTheFirstRunsOutputWhole) {
   TempDir dir;
   Result r = emdae("run " + quote(example("patch_test")) + " -q --out o", dir.path());
