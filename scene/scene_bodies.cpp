@@ -1,6 +1,7 @@
 // [[bodies]], [[contacts]], [[dirichlet]] and [[loads]]: calls on the Model
 // (core/model.hpp) and add_mortar_contact (contact/contact_pair.hpp), which
 // compute the masses, lumped tractions and prescribed motions they imply.
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 
@@ -320,6 +321,8 @@ void Builder::parse_contact(const Fields& f) {
     warn(f.where(), "slave and master are on the same body '" + slave_body +
                         "': self-contact is not what the mortar contact was verified for");
   const std::string name = unique_name(f, contact_names_, slave + "/" + master, "contact");
+  ContactSurfaces surfaces{name, slave, master, f.where(*f.find("slave")), f.where(), {}, {}};
+  refuse_redundant_pair(f, surfaces);
   ContactOptions options;
   options.search_margin = f.optional_non_negative("search_margin").value_or(options.search_margin);
   options.modified_mass = f.boolean("modified_mass", false);
@@ -330,6 +333,64 @@ void Builder::parse_contact(const Fields& f) {
                "modified_mass = true, not both");
   model_call(f, [&] { add_mortar_contact(model(), slave, master, name, options); });
   contact_where_[name] = f.where();
+  surfaces.modified_mass = options.modified_mass;
+  if (const auto* n = f.find("modified_mass")) surfaces.mass_where = f.where(*n);
+  contact_surfaces_.push_back(std::move(surfaces));
+}
+
+namespace {
+
+// A surface's segments, each as its (smaller, larger) global node, sorted.
+std::vector<std::pair<int, int>> surface_edges(const Model& model, const std::string& set) {
+  std::vector<std::pair<int, int>> edges;
+  for (const auto& e : model.edges(set))
+    edges.emplace_back(std::min(e[0], e[1]), std::max(e[0], e[1]));
+  std::sort(edges.begin(), edges.end());
+  return edges;
+}
+
+bool meet(const std::vector<std::pair<int, int>>& a, const std::vector<std::pair<int, int>>& b) {
+  auto i = a.begin(), j = b.begin();
+  while (i != a.end() && j != b.end()) {
+    if (*i == *j) return true;
+    *i < *j ? ++i : ++j;
+  }
+  return false;
+}
+
+}  // namespace
+
+void Builder::refuse_redundant_pair(const Fields& f, ContactSurfaces& pair) const {
+  pair.slave_edges = surface_edges(model(), pair.slave);
+  pair.master_edges = surface_edges(model(), pair.master);
+  // A slave segment in two pairs whose masters share a segment gives its
+  // nodes the same weighted gap twice (equal constraint rows: the Newton
+  // matrix is singular at the first contact); so does a pair and its swap
+  // (each surface constrained against the other: two-pass mortar, which
+  // over-constrains the interface). Surfaces that share only a corner node
+  // (a block's bottom and side on one master), and a slave surface on
+  // several masters without a common segment (a ring between two blocks),
+  // are different pairs.
+  for (std::size_t i = 0; i < contact_surfaces_.size(); ++i) {
+    const ContactSurfaces& other = contact_surfaces_[i];
+    const bool same =
+        meet(pair.slave_edges, other.slave_edges) && meet(pair.master_edges, other.master_edges);
+    const bool swapped =
+        meet(pair.slave_edges, other.master_edges) && meet(pair.master_edges, other.slave_edges);
+    if (!same && !swapped) continue;
+    f.fail_key(
+        "slave",
+        fmt::format(
+            "contact '{}' ({} on {}) repeats contacts[{}] '{}' ({} on {}, at {}): {}; "
+            "the repeated constraints make the contact system singular, keep one "
+            "pair, received \"{}\"",
+            pair.name, pair.slave, pair.master, i, other.name, other.slave, other.master,
+            other.slave_where,
+            same ? "their slave surfaces share segments on master surfaces that share segments"
+                 : "each pair's slave surface is the other's master (two-pass contact "
+                   "is not supported)",
+            pair.slave));
+  }
 }
 
 void Builder::refuse_overlap() {
@@ -365,6 +426,74 @@ void Builder::refuse_overlap() {
                        set->describe(i), phi, set->name()));
     }
   }
+}
+
+void Builder::refuse_unsupported_massless() {
+  // A static analysis takes no dynamic step (and solves with the exact
+  // gradient, which needs no hand-over).
+  if (settings().static_only) return;
+  const System& system = model().system();
+  if (!system.has_massless_nodes()) return;
+  const int dim = system.dim();
+  const auto& massless = system.is_massless();
+  const auto& prescribed = system.is_prescribed();
+  auto is_massless = [&](int a) { return massless[static_cast<std::size_t>(system.dof(a, 0))]; };
+  auto is_free = [&](int a) { return !prescribed[static_cast<std::size_t>(system.dof(a, 0))]; };
+  // As StepProblem does: the free nodes with mass of the terms (elements)
+  // each massless node is in.
+  std::vector<std::vector<int>> around(static_cast<std::size_t>(system.n_nodes()));
+  std::vector<std::vector<int>> neighbours(static_cast<std::size_t>(system.n_nodes()));
+  for (const auto& term : system.potentials()) {
+    std::vector<int> nodes;
+    for (int d : term->dofs())
+      if (d % dim == 0) nodes.push_back(d / dim);
+    for (int a : nodes) {
+      if (!is_massless(a)) continue;
+      auto& mine = around[static_cast<std::size_t>(a)];
+      auto& near = neighbours[static_cast<std::size_t>(a)];
+      near.insert(near.end(), nodes.begin(), nodes.end());
+      for (int k : nodes)
+        if (!is_massless(k) && is_free(k) && std::find(mine.begin(), mine.end(), k) == mine.end())
+          mine.push_back(k);
+    }
+  }
+  for (const auto& group : system.mass_groups())
+    for (int a : group.massless) {
+      if (!is_free(a) || around[static_cast<std::size_t>(a)].size() >= 2) continue;
+      // The contacts whose modified mass made the node or its element
+      // neighbours massless.
+      const auto& near = neighbours[static_cast<std::size_t>(a)];
+      std::vector<std::size_t> involved;
+      for (std::size_t i = 0; i < contact_surfaces_.size(); ++i) {
+        const ContactSurfaces& c = contact_surfaces_[i];
+        if (!c.modified_mass) continue;
+        bool touches = false;
+        for (const auto* edges : {&c.slave_edges, &c.master_edges})
+          for (const auto& e : *edges)
+            touches = touches || std::find(near.begin(), near.end(), e.first) != near.end() ||
+                      std::find(near.begin(), near.end(), e.second) != near.end();
+        if (touches) involved.push_back(i);
+      }
+      std::string body_node = "node " + std::to_string(a);
+      for (const auto& b : model().bodies())
+        if (a >= b.node(0) && a < b.node(b.mesh.n_nodes()))
+          body_node =
+              fmt::format("node {} of body '{}' (its mesh node {})", a, b.name, a - b.node(0));
+      std::string names;
+      for (std::size_t i : involved)
+        names += fmt::format("{}contacts[{}] '{}' (modified_mass at {})", names.empty() ? "" : ", ",
+                             i, contact_surfaces_[i].name, contact_surfaces_[i].mass_where);
+      const std::size_t last = involved.empty() ? 0 : involved.back();
+      fail(involved.empty() ? loc_.start() : contact_surfaces_[last].mass_where,
+           fmt::format("contacts[{}].modified_mass", last),
+           fmt::format("{} is massless and its elements have {} free node{} with mass, fewer "
+                       "than the two its forces go to (surfaces with a modified mass meet at "
+                       "it, or its neighbours are held); modified masses of {}: set "
+                       "modified_mass = false on one of them, received true",
+                       body_node, around[static_cast<std::size_t>(a)].size(),
+                       around[static_cast<std::size_t>(a)].size() == 1 ? "" : "s",
+                       names.empty() ? std::string("the contacts") : names));
+    }
 }
 
 void Builder::parse_dirichlet(const Fields& f) {

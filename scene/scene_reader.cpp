@@ -35,6 +35,7 @@ void Builder::finish() {
     fail(loc_.start(), e.key(), e.what());
   }
   refuse_overlap();
+  refuse_unsupported_massless();
 }
 
 namespace {

@@ -6,6 +6,7 @@
 #include <map>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 #include "scene/toml_fields.hpp"
@@ -40,6 +41,10 @@ class Builder {
   /// Refuses bodies in contact pairs that overlap at the start (without
   /// [statics] to push them apart): such a run "conserves" nothing.
   void refuse_overlap();
+  /// Refuses modified masses that leave a massless node with fewer than two
+  /// free nodes with mass in its elements: em and midpoint hand its forces
+  /// to those nodes (integrators/step_problem.cpp) and could not start.
+  void refuse_unsupported_massless();
   /// The scene has [statics] and no [time]: a static analysis.
   void set_static_only() { scene_.settings.static_only = true; }
 
@@ -92,6 +97,20 @@ class Builder {
   std::map<std::string, std::string> particle_where_, body_where_;
   std::vector<std::string> contact_names_, load_names_;
   std::map<std::string, std::string> contact_where_;
+  // Each contact pair's surfaces (edges as sorted global node pairs, sorted)
+  // and where its keys are, for the redundant-pair check and the
+  // modified-mass keys.
+  struct ContactSurfaces {
+    std::string name, slave, master, slave_where, mass_where;
+    std::vector<std::pair<int, int>> slave_edges, master_edges;
+    bool modified_mass = false;
+  };
+  std::vector<ContactSurfaces> contact_surfaces_;
+  /// Refuses a pair whose slave surface shares a segment with an earlier
+  /// pair's on a master surface that shares one too (or the earlier pair
+  /// swapped): their constraints repeat each other and the contact system
+  /// is singular.
+  void refuse_redundant_pair(const Fields& f, ContactSurfaces& pair) const;
   // Where scheme.name was given (a static analysis does not use it).
   std::string scheme_name_where_;
 };

@@ -59,8 +59,57 @@ const std::string kDisk =
     "[[bodies]]\nname = \"d\"\n"
     "material = { young = 10.0, poisson = 0.3, density = 1.0 }\n";
 
+// A block on a wider one, both rectangles; `contacts` follows.
+const std::string kBlocks =
+    kTime +
+    "[[bodies]]\nname = \"lower\"\n"
+    "mesh = { type = \"rectangle\", origin = [-0.5, 0.0], width = 1.0, height = 0.25, nx = 12, "
+    "ny = 3 }\nmaterial = { young = 100.0, poisson = 0.3, density = 1.0 }\n\n"
+    "[[bodies]]\nname = \"upper\"\nvelocity = [0.0, -0.5]\n"
+    "mesh = { type = \"rectangle\", origin = [-0.25, 0.3], width = 0.5, height = 0.25, nx = 4, "
+    "ny = 3 }\nmaterial = { young = 100.0, poisson = 0.3, density = 1.0 }\n\n";
+// The block's bottom and its left side on the lower block's top: two pairs
+// that share only the block's corner node.
+const std::string kBottomAndSide =
+    "[[contacts]]\nname = \"bottom\"\nslave = \"upper.bottom\"\nmaster = \"lower.top\"\n\n"
+    "[[contacts]]\nname = \"side\"\nslave = \"upper.left\"\nmaster = \"lower.top\"\n\n";
+
+// Both with a modified mass: the corner element of the block keeps one node
+// with mass, and the corner node's forces have nowhere to go.
+const std::string kBottomAndMassless =
+    "[[contacts]]\nname = \"bottom\"\nslave = \"upper.bottom\"\nmaster = \"lower.top\"\n"
+    "modified_mass = true\n\n"
+    "[[contacts]]\nname = \"side\"\nslave = \"upper.left\"\nmaster = \"lower.top\"\n"
+    "modified_mass = true  # side\n\n";
+
 std::vector<Malformed> malformed_fe_scenes() {
+  const std::string dup = kValid +
+                          "[[contacts]]\nname = \"again\"\nslave  = \"a.outer\"\n"
+                          "master = \"b.outer\"\n";
+  const std::string swapped = kValid +
+                              "[[contacts]]\nname = \"back\"\nslave  = \"b.outer\"\n"
+                              "master = \"a.outer\"\n";
+  const std::string first_slave =
+      "{path}:" + std::to_string(line_of(kValid, "slave = \"a.outer\"")) + ":";
   return {
+      {"duplicate_contact_pair",
+       dup,
+       "slave  = \"a.outer\"",
+       {"key 'contacts[1].slave'", "contact 'again' (a.outer on b.outer)",
+        "repeats contacts[0] 'a.outer/b.outer' (a.outer on b.outer, at ", first_slave, "singular",
+        "received \"a.outer\""}},
+      {"swapped_contact_pair",
+       swapped,
+       "slave  = \"b.outer\"",
+       {"key 'contacts[1].slave'", "repeats contacts[0] 'a.outer/b.outer'", first_slave,
+        "two-pass contact is not supported"}},
+      {"modified_mass_on_meeting_surfaces",
+       kBlocks + kBottomAndMassless,
+       "modified_mass = true  # side",
+       {"key 'contacts[1].modified_mass'", "node 52 of body 'upper' (its mesh node 0) is massless",
+        "1 free node with mass", "contacts[0] 'bottom' (modified_mass at ",
+        "contacts[1] 'side' (modified_mass at ", "set modified_mass = false on one of them",
+        "received true"}},
       {"poisson_half",
        with(kValid, "poisson = 0.1", "poisson = 0.5"),
        "poisson = 0.5",
@@ -361,6 +410,49 @@ TEST(SceneFe, CommandRefusesMalformedScenesWithoutOutput) {
     EXPECT_FALSE(fs::exists(dir / "o")) << c.name;
     EXPECT_FALSE(fs::exists(dir / "out")) << c.name;
   }
+}
+
+// Pairs that are not repeats: a block's bottom and side on one master share
+// only the corner node; a slave surface on two masters without a common
+// segment. A modified mass on one of the pairs leaves every element of the
+// block two nodes with mass.
+TEST(SceneFe, ContactPairsThatShareOnlyANodeOrTheSlaveAreAccepted) {
+  TempDir dir;
+  const auto corner = load_scene(dir.write("corner.toml", kBlocks + kBottomAndSide));
+  EXPECT_EQ(corner->model->contacts().size(), 2u);
+  const auto one_massless = load_scene(
+      dir.write("one.toml", kBlocks + with(kBottomAndSide, "master = \"lower.top\"\n",
+                                           "master = \"lower.top\"\nmodified_mass = true\n")));
+  EXPECT_TRUE(one_massless->model->contacts()[0].modified_mass);
+  EXPECT_TRUE(one_massless->system().has_massless_nodes());
+  const auto two_masters = load_scene(dir.write(
+      "two.toml",
+      kBlocks + "[[bodies]]\nname = \"beside\"\n"
+                "mesh = { type = \"rectangle\", origin = [0.6, 0.0], width = 0.5, height = 0.25, "
+                "nx = 2, ny = 1 }\nmaterial = { young = 100.0, poisson = 0.3, density = 1.0 }\n\n"
+                "[[contacts]]\nslave = \"upper.bottom\"\nmaster = \"lower.top\"\n"
+                "[[contacts]]\nslave = \"upper.bottom\"\nmaster = \"beside.top\"\n"));
+  EXPECT_EQ(two_masters->model->contacts().size(), 2u);
+}
+
+// The modified masses of two pairs that meet at a corner, given by --set:
+// `check` refuses them as `run` does, naming the key, and nothing is written.
+TEST(SceneFe, ModifiedMassesThatMeetAreRefusedByCheckAndRun) {
+  TempDir dir;
+  const std::string path = dir.write("blocks.toml", kBlocks + kBottomAndSide);
+  const std::string sets =
+      " --set contacts[0].modified_mass=true --set contacts[1].modified_mass=true";
+  for (const std::string& args :
+       {"check " + quote(path) + sets, "run " + quote(path) + sets + " --out " + quote(dir / "o"),
+        "run " + quote(path) + sets}) {
+    const Result r = emdae(args, dir.path());
+    EXPECT_EQ(r.code, 2) << args << "\n" << r.output;
+    EXPECT_NE(r.output.find("key 'contacts[1].modified_mass'"), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("contacts[0] 'bottom'"), std::string::npos) << r.output;
+    EXPECT_EQ(r.output.find("internal error"), std::string::npos) << r.output;
+  }
+  EXPECT_FALSE(fs::exists(dir / "o"));
+  EXPECT_FALSE(fs::exists(dir / "out"));
 }
 
 TEST(SceneFe, SchemeFromTheCommandLineIsNamedAsTheCulprit) {
