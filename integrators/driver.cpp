@@ -44,9 +44,10 @@ RunOutcome integrate(Stepper& stepper, State& state, const TimeSettings& time,
         msg.precision(6);
         // IDA runs its own corrector and error test, not our Newton solve.
         msg << (stepper.name() == "ida" ? "IDA failed" : "Newton failed") << " at t = " << state.t
-            << " with dt = " << step << " (" << stats.iterations << " iterations, residual "
-            << stats.residual << ", " << stats.message
-            << "); no smaller step allowed (min_dt = " << min_dt << ")";
+            << " with dt = " << step << " (" << stats.iterations << " iterations, ";
+        // A residual the stepper did not measure is not reported as 0.
+        if (std::isfinite(stats.residual)) msg << "residual " << stats.residual << ", ";
+        msg << stats.message << "); no smaller step allowed (min_dt = " << min_dt << ")";
         out.ok = false;
         out.message = msg.str();
         return out;

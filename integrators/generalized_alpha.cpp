@@ -439,6 +439,7 @@ StepStats GeneralizedAlphaStepper::step(State& state, double dt) {
       start(s);
     } catch (const std::runtime_error& e) {
       StepStats failed;
+      failed.residual = std::numeric_limits<double>::quiet_NaN();  // no Newton solve ran
       failed.message = std::string("generalized-alpha start: ") + e.what();
       return failed;
     }

@@ -549,6 +549,9 @@ StepStats IdaStepper::step(State& state, double dt) {
                                 " positions for a system of " + std::to_string(m.n) + " dofs");
   const int dim = m.s.dim();
   StepStats stats;
+  // IDA's corrector keeps its residual to itself: a failed step reports none
+  // (an accepted one the constraint residual, below).
+  stats.residual = std::numeric_limits<double>::quiet_NaN();
   stats.external_impulse = Vec::Zero(dim);
   stats.external_angular_impulse = Vec::Zero(dim == 2 ? 1 : 3);
   m.error = nullptr;
@@ -582,7 +585,16 @@ StepStats IdaStepper::step(State& state, double dt) {
     }
     m.active.insert(m.active.end(), entering.begin(), entering.end());
     if (restart) {
-      stats.contact_events += m.restart(state.t, state.q, state.v, entering, dt);
+      // A start IDA cannot make (redundant constraints: a singular index-1
+      // matrix; positions that cannot meet the constraints) is the run's
+      // numerical failure, as generalized-alpha's is, not an internal error.
+      try {
+        stats.contact_events += m.restart(state.t, state.q, state.v, entering, dt);
+      } catch (const std::runtime_error& e) {
+        m.need_restart = true;
+        stats.message = std::string("IDA start: ") + e.what();
+        return stats;
+      }
       for (int cand : entering) stats.contact_events += m.is_active(cand) ? 1 : 0;
     } else {
       m.refresh_terms();

@@ -49,6 +49,8 @@ State initial_state(const System& system);
 struct StepStats {
   bool converged = false;
   int iterations = 0;
+  // The Newton residual; NaN where the stepper has none to report (IDA's
+  // own corrector, a failed start), and the failure message leaves it out.
   double residual = 0.0;
   std::string message;
   // Contact events of the step (integrators/active_set.hpp): entries and

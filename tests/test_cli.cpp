@@ -301,6 +301,36 @@ TEST(Cli, NumericalFailureExitsThreeAndKeepsTheRecord) {
   EXPECT_EQ(lines[0], kHeader2D);
 }
 
+// Three links hold one particle in the plane: redundant constraints, a
+// singular matrix at the start. Every scheme fails numerically (exit 3, the
+// summary says where); none reports an internal error, and a residual that
+// no Newton solve measured is not reported as 0.
+TEST(Cli, RedundantConstraintsFailNumericallyInEveryScheme) {
+  TempDir dir;
+  const std::string path =
+      dir.write("overcon.toml",
+                "[time]\ndt = 0.01\nt_end = 0.1\n[gravity]\nacceleration = [0.0, -9.81]\n"
+                "[[particles]]\nname = \"a\"\nmass = 1\nposition = [0, 0]\n"
+                "[[particles]]\nname = \"p1\"\nposition = [1, 0]\nfixed = true\n"
+                "[[particles]]\nname = \"p2\"\nposition = [0, 1]\nfixed = true\n"
+                "[[particles]]\nname = \"p3\"\nposition = [-1, 0]\nfixed = true\n"
+                "[[links]]\nbetween = [\"a\", \"p1\"]\n[[links]]\nbetween = [\"a\", \"p2\"]\n"
+                "[[links]]\nbetween = [\"a\", \"p3\"]\n");
+  for (const std::string scheme : {"em", "galpha", "ida"}) {
+    const fs::path out = dir / ("o_" + scheme);
+    const Result r =
+        emdae("run " + quote(path) + " --scheme " + scheme + " --out " + quote(out), dir.path());
+    EXPECT_EQ(r.code, 3) << scheme << "\n" << r.output;
+    EXPECT_EQ(r.output.find("internal error"), std::string::npos) << scheme << "\n" << r.output;
+    const nlohmann::json s = read_json(out / "summary.json");
+    const std::string status = s["status"].get<std::string>();
+    EXPECT_NE(status.find(scheme == "ida" ? "IDA failed at t = 0 " : "failed at t = 0 "),
+              std::string::npos)
+        << scheme << ": " << status;
+    EXPECT_EQ(status.find("residual 0,"), std::string::npos) << scheme << ": " << status;
+  }
+}
+
 TEST(Cli, FailedToleranceCheckExitsFour) {
   TempDir dir;
   const Result r =

@@ -455,6 +455,33 @@ TEST(SceneFe, ModifiedMassesThatMeetAreRefusedByCheckAndRun) {
   EXPECT_FALSE(fs::exists(dir / "out"));
 }
 
+// IDA's corrector does not report a residual: a failed IDA run says what
+// failed (IDA's flag) and gives no residual, not "residual 0".
+TEST(SceneFe, IdaFailureReportsNoResidualItDidNotMeasure) {
+  TempDir dir;
+  // Two blocks meeting at 20 (about the speed of sound, sqrt(E / rho) = 10).
+  const std::string block =
+      "material = { model = \"svk\", young = 100.0, poisson = 0.3, density = 1.0 }\n";
+  const std::string path = dir.write(
+      "fast.toml",
+      "[time]\ndt = 0.0005\nt_end = 0.04\n[scheme]\nname = \"ida\"\n"
+      "[[bodies]]\nname = \"lower\"\nvelocity = [0.0, 10.0]\n"
+      "mesh = { type = \"rectangle\", origin = [-0.5, 0.0], width = 1.0, height = 0.25, "
+      "nx = 12, ny = 3 }\n" +
+          block +
+          "[[bodies]]\nname = \"upper\"\nvelocity = [0.0, -10.0]\n"
+          "mesh = { type = \"rectangle\", origin = [-0.25, 0.26], width = 0.5, height = 0.25, "
+          "nx = 7, ny = 4 }\n" +
+          block + "[[contacts]]\nslave = \"upper.bottom\"\nmaster = \"lower.top\"\n");
+  const Result r = emdae("run " + quote(path) + " --out " + quote(dir / "o"), dir.path());
+  EXPECT_EQ(r.code, 3) << r.output;
+  const nlohmann::json s = read_json(dir / "o/summary.json");
+  const std::string status = s["status"].get<std::string>();
+  EXPECT_NE(status.find("IDA failed at t = "), std::string::npos) << status;
+  EXPECT_NE(status.find(" iterations, IDASolve: IDA_"), std::string::npos) << status;
+  EXPECT_EQ(status.find("residual"), std::string::npos) << status;
+}
+
 TEST(SceneFe, SchemeFromTheCommandLineIsNamedAsTheCulprit) {
   TempDir dir;
   const Result r = emdae("run " + quote(example("ring_impact")) + " --scheme leapfrog", dir.path());
