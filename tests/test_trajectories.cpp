@@ -225,6 +225,58 @@ TEST(Trajectories, VtkPointsMatchTheTable) {
   EXPECT_EQ(files, 5);  // steps 0, 5, 10, 15, 20
 }
 
+// A particle's name is a CSV field like contact.csv's pair: a comma, a quote
+// or a line break in it is quoted (RFC 4180), so every row still has six
+// fields and the name reads back whole.
+TEST(Trajectories, PointNamesAreQuotedAsCsvFields) {
+  const std::string name = "up,per\"x\nline";  // TOML: "up,per\"x\nline"
+  std::string text = pendulum_scene("em", 0.05, 0.1);
+  for (auto at = text.find("\"bob\""); at != std::string::npos; at = text.find("\"bob\""))
+    text.replace(at, 5, "\"up,per\\\"x\\nline\"");
+  TempDir dir;
+  auto scene = load_scene_text(text, "pendulum.toml");
+  ASSERT_EQ(scene->model->particles().at(0).name, name);
+  scene->settings.out_dir = (dir.path() / "run").string();
+  const RunResult r = run(*scene->model, scene->settings);
+  ASSERT_TRUE(r.finished()) << r.summary.status;
+  // An RFC 4180 reader: fields split at commas outside quotes, rows at line
+  // breaks outside quotes, "" inside quotes is one quote.
+  const std::string csv = read_text(dir.path() / "run" / "trajectories.csv");
+  std::vector<std::vector<std::string>> rows(1, std::vector<std::string>(1));
+  bool quoted = false;
+  for (std::size_t i = 0; i < csv.size(); ++i) {
+    const char c = csv[i];
+    if (quoted) {
+      if (c == '"' && i + 1 < csv.size() && csv[i + 1] == '"') {
+        rows.back().back() += '"';
+        ++i;
+      } else if (c == '"') {
+        quoted = false;
+      } else {
+        rows.back().back() += c;
+      }
+    } else if (c == '"') {
+      quoted = true;
+    } else if (c == ',') {
+      rows.back().emplace_back();
+    } else if (c == '\n') {
+      rows.emplace_back(1);
+    } else {
+      rows.back().back() += c;
+    }
+  }
+  EXPECT_FALSE(quoted);
+  ASSERT_EQ(rows.back(), std::vector<std::string>(1));  // the file ends with a line break
+  rows.pop_back();
+  ASSERT_EQ(rows.size(), 1u + 3u);  // header, t = 0, 0.05, 0.1
+  EXPECT_EQ(rows[0], (std::vector<std::string>{"t", "point", "x", "y", "vx", "vy"}));
+  for (std::size_t i = 1; i < rows.size(); ++i) {
+    ASSERT_EQ(rows[i].size(), 6u) << csv;
+    EXPECT_EQ(rows[i][1], name);
+  }
+  EXPECT_EQ(std::stod(rows.back()[2]), r.state.q[0]);
+}
+
 // A block's top tracked; a second run into the same folder replaces the
 // files with its own.
 TEST(Trajectories, TrackedNodeSetAndReplacedOnRerun) {

@@ -8,6 +8,7 @@
 #include <cstring>
 #include <filesystem>
 #include <stdexcept>
+#include <string>
 
 #include "verify/atomic_file.hpp"
 #include "verify/vtu_encoding.hpp"
@@ -20,6 +21,15 @@ namespace fs = std::filesystem;
 
 std::string csv_path(const std::string& dir) {
   return (fs::path(dir) / "trajectories.csv").string();
+}
+
+// A CSV field: quoted when it holds a separator, a quote or a line break
+// (as contact.csv's pair names are); a point is named after its particle.
+std::string csv_field(const std::string& s) {
+  if (s.find_first_of(",\"\n\r") == std::string::npos) return s;
+  std::string out = "\"";
+  for (char c : s) out += c == '"' ? std::string("\"\"") : std::string(1, c);
+  return out + "\"";
 }
 
 void check_points(const std::vector<TrackedPoint>& points, int dim) {
@@ -85,7 +95,7 @@ std::string TrajectoryWriter::file_name(long step) {
 void TrajectoryWriter::write_rows(const State& state) {
   if (!csv_) throw std::logic_error("TrajectoryWriter::write_rows after close");
   for (const TrackedPoint& p : points_) {
-    std::fprintf(csv_, "%.17g,%s", state.t, p.name.c_str());
+    std::fprintf(csv_, "%.17g,%s", state.t, csv_field(p.name).c_str());
     for (const Vec* x : {&state.q, &state.v})
       for (int d = 0; d < dim_; ++d) std::fprintf(csv_, ",%.17g", (*x)[p.node * dim_ + d]);
     std::fputc('\n', csv_);
