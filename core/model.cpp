@@ -245,7 +245,8 @@ std::pair<const Body*, std::string> Model::find_set(const std::string& set, SetK
   const char* kind_name = kind == SetKind::Nodes ? "node set" : "edge set";
   const auto dot = set.find('.');
   if (dot == std::string::npos)
-    throw ModelError(key, std::string("must name a ") + kind_name + " as \"body.set\"");
+    throw ModelError(key, std::string(kind == SetKind::Nodes ? "must name a " : "must name an ") +
+                              kind_name + " as \"body.set\"");
   const std::string body = set.substr(0, dot), name = set.substr(dot + 1);
   const auto it =
       std::find_if(bodies_.begin(), bodies_.end(), [&](const Body& b) { return b.name == body; });

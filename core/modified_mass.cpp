@@ -1,5 +1,7 @@
 #include "core/modified_mass.hpp"
 
+#include <fmt/format.h>
+
 #include <Eigen/Dense>
 #include <algorithm>
 #include <map>
@@ -94,7 +96,7 @@ ModifiedMass modify_mass(System& system, const std::vector<int>& nodes,
     if (!(w + dm[k] > 0.0))
       throw std::invalid_argument("node " + std::to_string(k) +
                                   " would be left without positive mass (" +
-                                  std::to_string(w + dm[k]) + ")");
+                                  fmt::format("{:.6g}", w + dm[k]) + ")");
   }
   out.moved = moved;
   out.massless_nodes = static_cast<int>(moving.size());

@@ -241,9 +241,9 @@ std::string Builder::set_ref(const Fields& f, std::string_view k, const toml::no
                              Model::SetKind kind) const {
   const char* kind_name = kind == Model::SetKind::Nodes ? "node set" : "edge set";
   if (!n.is_string())
-    f.fail_at(
-        n, k,
-        std::string("must name a ") + kind_name + " as \"body.set\", received " + show_typed(n));
+    f.fail_at(n, k,
+              std::string(kind == Model::SetKind::Nodes ? "must name a " : "must name an ") +
+                  kind_name + " as \"body.set\", received " + show_typed(n));
   const std::string& text = n.as_string()->get();
   try {
     model().find_set(text, kind, std::string(k));

@@ -154,6 +154,14 @@ std::vector<Malformed> malformed_fe_scenes() {
        with(kValid, "slave = \"a.outer\"", "slave = \"outer\""),
        "slave = \"outer\"",
        {"key 'contacts[0].slave'", "\"body.set\"", "received \"outer\""}},
+      {"slave_not_a_string",
+       with(kValid, "slave = \"a.outer\"", "slave = 5"),
+       "slave = 5",
+       {"key 'contacts[0].slave'", "must name an edge set as \"body.set\""}},
+      {"dirichlet_nodes_not_a_string",
+       kValid + "[[dirichlet]]\nnodes = 5\nfixed = true\n",
+       "nodes = 5",
+       {"key 'dirichlet[0].nodes'", "must name a node set as \"body.set\""}},
       {"contact_with_itself",
        with(kValid, "master = \"b.outer\"", "master = \"a.outer\""),
        "master = \"a.outer\"",
@@ -453,6 +461,32 @@ TEST(SceneFe, ModifiedMassesThatMeetAreRefusedByCheckAndRun) {
   }
   EXPECT_FALSE(fs::exists(dir / "o"));
   EXPECT_FALSE(fs::exists(dir / "out"));
+}
+
+// A modified mass that would leave a node of the master body two elements
+// through with no mass: the mass is printed as a number (%g), not as the
+// "-0.000000" of a fixed six decimals.
+TEST(SceneFe, AModifiedMassLeftNonPositiveIsPrintedAsANumber) {
+  TempDir dir;
+  const std::string text = with(kBlocks, "nx = 12, ny = 3", "nx = 6, ny = 2");
+  ASSERT_NE(text, kBlocks) << "bad test: the lower block was not changed";
+  const std::string thin =
+      dir.write("thin.toml", text +
+                                 "[[contacts]]\nslave = \"upper.bottom\"\nmaster = "
+                                 "\"lower.top\"\nmodified_mass = true\n");
+  try {
+    load_scene(thin);
+    FAIL() << "no SceneError";
+  } catch (const SceneError& e) {
+    const std::string msg = e.what();
+    EXPECT_NE(msg.find("key 'contacts[0].modified_mass'"), std::string::npos) << msg;
+    const auto at = msg.find("would be left without positive mass (");
+    ASSERT_NE(at, std::string::npos) << msg;
+    const std::string value = msg.substr(at + 37, msg.find(')', at) - at - 37);
+    EXPECT_EQ(value.find(".000000"), std::string::npos) << msg;
+    EXPECT_LE(std::stod(value), 0.0) << msg;
+    EXPECT_GT(std::stod(value), -1e-12) << msg;
+  }
 }
 
 // IDA's corrector does not report a residual: a failed IDA run says what
