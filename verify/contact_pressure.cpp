@@ -12,6 +12,7 @@
 #include <stdexcept>
 
 #include "verify/atomic_file.hpp"
+#include "verify/csv_field.hpp"
 
 namespace emdae {
 
@@ -21,14 +22,6 @@ std::string number(double x) {
   if (std::isnan(x)) return "nan";
   if (std::isinf(x)) return x > 0 ? "inf" : "-inf";
   return fmt::format("{:.17g}", x);
-}
-
-// A CSV field: quoted when it holds a separator, a quote or a line break.
-std::string field(const std::string& s) {
-  if (s.find_first_of(",\"\n\r") == std::string::npos) return s;
-  std::string out = "\"";
-  for (char c : s) out += c == '"' ? std::string("\"\"") : std::string(1, c);
-  return out + "\"";
 }
 
 }  // namespace
@@ -81,9 +74,9 @@ void write_contact_table(const std::string& path, const std::vector<ContactNode>
   for (std::size_t i = 0; i < columns.size(); ++i) text += (i ? "," : "") + columns[i];
   text += '\n';
   for (const auto& n : nodes)
-    text +=
-        fmt::format("{},{},{},{},{},{},{},{}\n", field(n.pair), n.node, number(n.x), number(n.y),
-                    number(n.gap), number(n.pressure), number(n.weight), number(n.force));
+    text += fmt::format("{},{},{},{},{},{},{},{}\n", csv_field(n.pair), n.node, number(n.x),
+                        number(n.y), number(n.gap), number(n.pressure), number(n.weight),
+                        number(n.force));
   write_atomically(path, text, "contact table");
 }
 

@@ -11,6 +11,7 @@
 #include <ostream>
 
 #include "verify/binary_io.hpp"
+#include "verify/csv_field.hpp"
 #include "verify/page.hpp"
 #include "verify/study_detail.hpp"
 
@@ -47,14 +48,6 @@ std::string cell(const std::optional<double>& x, const char* format = "{:.6e}") 
   return x ? cell(*x, format) : std::string();
 }
 
-// RFC 4180: quoted when it holds a separator, a quote or a line break.
-std::string csv_text(const std::string& s) {
-  if (s.find_first_of(",\"\n\r") == std::string::npos) return s;
-  std::string out = "\"";
-  for (char c : s) out += (c == '"') ? std::string("\"\"") : std::string(1, c);
-  return out + "\"";
-}
-
 std::string csv_row(const Study& study, const StudyRun& r) {
   std::string out = fmt::format(
       "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
@@ -65,7 +58,7 @@ std::string csv_row(const Study& study, const StudyRun& r) {
       r.ran ? std::to_string(r.iterations) : "", r.ran ? cell(r.cpu_seconds, "{:.6f}") : "",
       cell(r.error), cell(r.error_rel), cell(r.order, "{:.4f}"), cell(r.energy_rel_error_max),
       cell(r.linear_momentum_error_max), cell(r.angular_momentum_rel_error_max),
-      cell(r.constraint_residual_max), csv_text(r.status));
+      cell(r.constraint_residual_max), csv_field(r.status));
   for (std::size_t k = 0; k < study.measures.size(); ++k)
     out += "," + (k < r.measure_errors.size() ? cell(r.measure_errors[k]) : std::string());
   return out + "\n";
@@ -456,7 +449,7 @@ std::string study_csv(const Study& study) {
       "role,scheme,dt,tol,steps,iterations,cpu_seconds,error,error_rel,order,"
       "energy_rel_error_max,linear_momentum_error_max,angular_momentum_rel_error_max,"
       "constraint_residual_max,status";
-  for (const auto& m : study.measures) out += "," + csv_text(m.id);
+  for (const auto& m : study.measures) out += "," + csv_field(m.id);
   out += "\n";
   for (const auto& r : study.runs) out += csv_row(study, r);
   const auto summaries = study.measure_summaries();

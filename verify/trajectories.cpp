@@ -11,6 +11,7 @@
 #include <string>
 
 #include "verify/atomic_file.hpp"
+#include "verify/csv_field.hpp"
 #include "verify/vtu_encoding.hpp"
 
 namespace emdae {
@@ -21,15 +22,6 @@ namespace fs = std::filesystem;
 
 std::string csv_path(const std::string& dir) {
   return (fs::path(dir) / "trajectories.csv").string();
-}
-
-// A CSV field: quoted when it holds a separator, a quote or a line break
-// (as contact.csv's pair names are); a point is named after its particle.
-std::string csv_field(const std::string& s) {
-  if (s.find_first_of(",\"\n\r") == std::string::npos) return s;
-  std::string out = "\"";
-  for (char c : s) out += c == '"' ? std::string("\"\"") : std::string(1, c);
-  return out + "\"";
 }
 
 void check_points(const std::vector<TrackedPoint>& points, int dim) {
