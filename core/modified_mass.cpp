@@ -110,4 +110,30 @@ ModifiedMass modify_mass(System& system, const std::vector<int>& nodes,
   return out;
 }
 
+std::vector<std::vector<int>> massive_free_neighbours(const System& system,
+                                                      const std::vector<int>* terms) {
+  const int dim = system.dim();
+  const auto& massless = system.is_massless();
+  const auto& prescribed = system.is_prescribed();
+  auto is_massless = [&](int a) { return massless[static_cast<std::size_t>(system.dof(a, 0))]; };
+  auto is_free = [&](int a) { return !prescribed[static_cast<std::size_t>(system.dof(a, 0))]; };
+  std::vector<std::vector<int>> around(static_cast<std::size_t>(system.n_nodes()));
+  const auto& potentials = system.potentials();
+  const std::size_t n_terms = terms ? terms->size() : potentials.size();
+  for (std::size_t t = 0; t < n_terms; ++t) {
+    const auto& term = potentials[terms ? static_cast<std::size_t>((*terms)[t]) : t];
+    std::vector<int> nodes;
+    for (int d : term->dofs())
+      if (d % dim == 0) nodes.push_back(d / dim);
+    for (int a : nodes) {
+      if (!is_massless(a)) continue;
+      auto& mine = around[static_cast<std::size_t>(a)];
+      for (int k : nodes)
+        if (!is_massless(k) && is_free(k) && std::find(mine.begin(), mine.end(), k) == mine.end())
+          mine.push_back(k);
+    }
+  }
+  return around;
+}
+
 }  // namespace emdae

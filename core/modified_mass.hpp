@@ -48,4 +48,13 @@ struct ModifiedMass {
 ModifiedMass modify_mass(System& system, const std::vector<int>& nodes,
                          const std::vector<int>& recipients, bool apply = true);
 
+/// Per node of `system`: for a massless node, the free nodes with mass that
+/// share a potential term (an element) with it, in the order the terms and
+/// their nodes come; empty for the others. em and midpoint hand a massless
+/// node's forces to these (integrators/step_problem.cpp), which needs two of
+/// them; the scene reader refuses modified masses that leave fewer. `terms`:
+/// the potentials to look at (indices), all of them when null.
+std::vector<std::vector<int>> massive_free_neighbours(const System& system,
+                                                      const std::vector<int>* terms = nullptr);
+
 }  // namespace emdae

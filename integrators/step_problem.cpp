@@ -6,6 +6,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "core/modified_mass.hpp"
 #include "core/quantities.hpp"
 
 namespace emdae {
@@ -92,21 +93,7 @@ StepProblem::StepProblem(const System& s, GradientKind kind, const State& start,
     return !s_.is_prescribed()[static_cast<std::size_t>(s_.dof(a, 0))];
   };
   auto is_massless = [&](int a) { return massless_[static_cast<std::size_t>(s_.dof(a, 0))]; };
-  around_.assign(static_cast<std::size_t>(s_.n_nodes()), {});
-  for (int p : touching_) {
-    std::vector<int> nodes;
-    for (int d : s_.potentials()[static_cast<std::size_t>(p)]->dofs())
-      if (d % dim == 0) nodes.push_back(d / dim);
-    for (int a : nodes) {
-      if (!is_massless(a)) continue;
-      for (int k : nodes)
-        if (!is_massless(k) && free_node(k) &&
-            std::find(around_[static_cast<std::size_t>(a)].begin(),
-                      around_[static_cast<std::size_t>(a)].end(),
-                      k) == around_[static_cast<std::size_t>(a)].end())
-          around_[static_cast<std::size_t>(a)].push_back(k);
-    }
-  }
+  around_ = massive_free_neighbours(s_, &touching_);
   transfers_.resize(static_cast<std::size_t>(s_.n_nodes()));
   for (int a = 0; a < s_.n_nodes(); ++a)
     if (!is_massless(a) && free_node(a))

@@ -7,6 +7,7 @@
 
 #include "contact/contact_pair.hpp"
 #include "core/gmsh_reader.hpp"
+#include "core/modified_mass.hpp"
 #include "integrators/stepper.hpp"
 #include "scene/scene_reader.hpp"
 
@@ -439,23 +440,19 @@ void Builder::refuse_unsupported_massless() {
   const auto& prescribed = system.is_prescribed();
   auto is_massless = [&](int a) { return massless[static_cast<std::size_t>(system.dof(a, 0))]; };
   auto is_free = [&](int a) { return !prescribed[static_cast<std::size_t>(system.dof(a, 0))]; };
-  // As StepProblem does: the free nodes with mass of the terms (elements)
-  // each massless node is in.
-  std::vector<std::vector<int>> around(static_cast<std::size_t>(system.n_nodes()));
+  // What StepProblem hands each massless node's forces to, and (for naming
+  // the contacts involved) every node of the elements it is in.
+  const std::vector<std::vector<int>> around = massive_free_neighbours(system);
   std::vector<std::vector<int>> neighbours(static_cast<std::size_t>(system.n_nodes()));
   for (const auto& term : system.potentials()) {
     std::vector<int> nodes;
     for (int d : term->dofs())
       if (d % dim == 0) nodes.push_back(d / dim);
-    for (int a : nodes) {
-      if (!is_massless(a)) continue;
-      auto& mine = around[static_cast<std::size_t>(a)];
-      auto& near = neighbours[static_cast<std::size_t>(a)];
-      near.insert(near.end(), nodes.begin(), nodes.end());
-      for (int k : nodes)
-        if (!is_massless(k) && is_free(k) && std::find(mine.begin(), mine.end(), k) == mine.end())
-          mine.push_back(k);
-    }
+    for (int a : nodes)
+      if (is_massless(a)) {
+        auto& near = neighbours[static_cast<std::size_t>(a)];
+        near.insert(near.end(), nodes.begin(), nodes.end());
+      }
   }
   for (const auto& group : system.mass_groups())
     for (int a : group.massless) {
