@@ -351,7 +351,7 @@ double MortarGapTerm::coverage(const Vec& q) const {
   return c;
 }
 
-double MortarGapTerm::engaged_value(const Vec& q) const {
+double MortarGapTerm::engaged_value(const Vec& q, bool with_barrier) const {
   Vec pi;
   invariants(q, pi);
   double f = 0.0, c = 0.0;
@@ -361,7 +361,7 @@ double MortarGapTerm::engaged_value(const Vec& q) const {
     c += mortar_pair_share(pb.data(), distance_fade_);
   }
   if (!(c > 0.0)) return std::numeric_limits<double>::infinity();
-  return coupled() ? f + coupling(c, nullptr, nullptr) : f;
+  return coupled() && with_barrier ? f + coupling(c, nullptr, nullptr) : f;
 }
 
 MortarGapTerm::CurrentWeight MortarGapTerm::current_weight(const Vec& q) const {

@@ -82,6 +82,14 @@ double MortarContact::gap(int i, const Vec& q) const {
   return t->engaged_value(local);
 }
 
+double MortarContact::overlap_gap(int i, const Vec& q) const {
+  const MortarGapTerm* t = terms_[static_cast<std::size_t>(i)].get();
+  if (!t) return std::numeric_limits<double>::infinity();
+  Vec local;
+  gather(*t, q, local);
+  return t->engaged_value(local, false);
+}
+
 MortarGapTerm::CurrentWeight MortarContact::current_weight(int i, const Vec& q) const {
   const MortarGapTerm* t = terms_[static_cast<std::size_t>(i)].get();
   if (!t) return {};

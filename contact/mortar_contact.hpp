@@ -53,6 +53,9 @@ class MortarContact final : public UnilateralConstraints {
   /// Phi_i(q) (with the coverage barrier of mortar.hpp), or +infinity when
   /// nothing of the node's slave segments lies opposite a master segment.
   double gap(int i, const Vec& q) const override;
+  /// The normalized weighted gap g_A / W_A alone (no coverage barrier), or
+  /// +infinity where gap() is.
+  double overlap_gap(int i, const Vec& q) const override;
   std::string describe(int i) const override;
   /// epsilon w_A when the contact is penalized, else 0.
   double penalty(int i) const override;

@@ -36,6 +36,11 @@ class UnilateralConstraints {
   /// engaged at q (no function, or nothing of the other body opposite it):
   /// only engaged candidates can be activated.
   virtual double gap(int i, const Vec& q) const = 0;
+  /// How far candidate i lies inside the other body at q, as a gap (negative
+  /// inside): Phi_i without what keeps a function continuous but measures no
+  /// overlap (the mortar coverage barrier); +infinity where gap() is. For
+  /// the check that bodies do not overlap at the start.
+  virtual double overlap_gap(int i, const Vec& q) const { return gap(i, q); }
   /// Describes candidate i for messages ("slave node 17 of ring_a").
   virtual std::string describe(int i) const = 0;
   /// Penalty stiffness k_i of candidate i, or 0 (the default) for an exact

@@ -414,7 +414,10 @@ void Builder::refuse_overlap() {
   for (const auto& set : system.unilateral()) {
     set->prepare(state.q, state.v, settings().static_only ? 0.0 : settings().time.dt);
     for (int i = 0; i < set->size(); ++i) {
-      const double phi = set->gap(i, state.q);
+      // The weighted gap without the coverage barrier: at a crossing of the
+      // surfaces the nodes next to it are partly covered, and the barrier
+      // (up to 0.3 of a node's weight) would lift their gaps above zero.
+      const double phi = set->overlap_gap(i, state.q);
       if (!(phi < -tolerance)) continue;  // apart, touching, or nothing opposite (+inf)
       const auto at = contact_where_.find(set->name());
       fail(at == contact_where_.end() ? loc_.start() : at->second,

@@ -341,9 +341,15 @@ void expect_discrete_gradient_identities(const MortarGapTerm& term, const Vec& q
   term_gradient(term, GradientKind::Discrete, q0, q1, 0, 0, g, nullptr, ws);
   const double f0 = term.value(q0, 0), f1 = term.value(q1, 0);
   // To round-off: of the difference, of the values themselves and of the
-  // sum g . (q1 - q0) (its terms may be larger than their sum).
+  // sum g . (q1 - q0) (its terms may be larger than their sum), and of the
+  // barrier G's values: a value is the gap part plus G, which may nearly
+  // cancel, and G's quotient (G(C1) - G(C0)) / (C1 - C0) carries eps |G|.
+  const auto barrier = [&](const Vec& q) {
+    return term.coupled() ? std::abs(term.coupling(term.coverage(q), nullptr, nullptr)) : 0.0;
+  };
   const double round_off = 8.0 * std::numeric_limits<double>::epsilon() *
-                           (std::abs(f0) + std::abs(f1) + g.norm() * (q1 - q0).norm());
+                           (std::abs(f0) + std::abs(f1) + 2.0 * (barrier(q0) + barrier(q1)) +
+                            g.norm() * (q1 - q0).norm());
   EXPECT_NEAR(g.dot(q1 - q0), f1 - f0, 1e-16 + relative * std::abs(f1 - f0) + round_off) << trial;
   const Vec mid = 0.5 * (q0 + q1);
   Eigen::Vector2d resultant = Eigen::Vector2d::Zero();
@@ -359,18 +365,21 @@ void expect_discrete_gradient_identities(const MortarGapTerm& term, const Vec& q
 // The exact gradient and its Jacobian against central differences of the
 // function and of the gradient. Where a fade is steep the third derivatives
 // are large (1e4): central differences are accurate to about 1e-12 at h =
-// 1e-6, and their round-off is about 2e-11.
+// 1e-6. Their round-off is that of the two values over 2h, a few eps |f| / h
+// (2e-11 with the barrier's R = 0.1 W, 6e-11 with 0.3 W).
 void expect_exact_gradient_and_jacobian(const MortarGapTerm& term, const Vec& q, TermWorkspace& ws,
                                         int trial) {
   Vec ge, gp, gm;
   Mat jac;
   term_gradient(term, GradientKind::Exact, q, q, 0, 0, ge, &jac, ws);
   const double h = 1e-6, scale = ge.cwiseAbs().maxCoeff();
+  const double eps = std::numeric_limits<double>::epsilon();
   for (Eigen::Index j = 0; j < q.size(); ++j) {
     Vec qp = q, qm = q;
     qp[j] += h, qm[j] -= h;
-    EXPECT_NEAR(ge[j], (term.value(qp, 0) - term.value(qm, 0)) / (2 * h), 1e-6 * scale + 5e-11)
-        << trial << " " << j;
+    const double fp = term.value(qp, 0), fm = term.value(qm, 0);
+    const double round_off = 4.0 * eps * (std::abs(fp) + std::abs(fm)) / (2 * h);
+    EXPECT_NEAR(ge[j], (fp - fm) / (2 * h), 1e-6 * scale + 1e-12 + round_off) << trial << " " << j;
     term_gradient(term, GradientKind::Exact, qp, qp, 0, 0, gp, nullptr, ws);
     term_gradient(term, GradientKind::Exact, qm, qm, 0, 0, gm, nullptr, ws);
     EXPECT_LE(((gp - gm) / (2 * h) - jac.col(j)).cwiseAbs().maxCoeff(),

@@ -12,6 +12,8 @@
 //  - HardRest: the resting block (block_rest.toml) after its static solve,
 //    the scene's 10^4 steps without a single contact event, every node of
 //    the face active throughout, its energy constant to 1e-12;
+//  - HardSlideOff: a block sliding off a supported block's end at four
+//    speeds, two steps and both materials (Default/);
 //  - HardEvents: contact events where the answer is known: blocks face to
 //    face with a modified mass (massless faces: nodes enter and leave at
 //    step ends, no multiplier oscillation) make exactly one entry and one
@@ -94,10 +96,7 @@ struct KnownFailing {
   double dt_factor, tolerance;
 };
 const std::vector<KnownFailing>& known_failing() {
-  // Newton stalls on a node whose mortar weight vanishes as it slides off
-  // the master face's end (the scene file says why).
-  static const std::vector<KnownFailing> cases = {{"slide_off_edge", 1.0, 1e-10},
-                                                  {"slide_off_edge", 1.0, 1e-11}};
+  static const std::vector<KnownFailing> cases = {};
   return cases;
 }
 
@@ -233,6 +232,58 @@ INSTANTIATE_TEST_SUITE_P(Study, HardCatalogue, ::testing::ValuesIn(catalogue(Gro
 GTEST_ALLOW_UNINSTANTIATED_PARAMETERIZED_TEST(HardCatalogue);
 INSTANTIATE_TEST_SUITE_P(KnownFailing, HardCatalogue,
                          ::testing::ValuesIn(catalogue(Group::KnownFailing)), case_name);
+
+// A block sliding off the end of a supported block (slide_off_edge.toml) at
+// four speeds, two steps and both materials, judged as the catalogue is: a
+// slider node's segment leaves the master's end while pressed on it, its
+// weighted gap held by a sliver (contact/mortar.hpp, kBarrierCoverage). With
+// the barrier at 1 % of coverage 9 of these 16 failed (Newton stalling at
+// ~2e-8 as the sliver's multiplier grew like 1 / coverage^2).
+struct SlideOff {
+  double speed, dt_factor;
+  const char* material;
+};
+
+class HardSlideOff : public ::testing::TestWithParam<SlideOff> {};
+
+TEST_P(HardSlideOff, ReleasesTheNodesLeavingTheMastersEnd) {
+  const SlideOff& p = GetParam();
+  const HardCase c{"slide_off_edge", p.dt_factor, 1e-10, 0.0};
+  char velocity[64];
+  std::snprintf(velocity, sizeof velocity, "bodies[1].velocity=[%.17g, 0.0]", p.speed);
+  const std::string model = std::string("\"") + p.material + "\"";
+  const auto scene = load_case(
+      c, {velocity, "bodies[0].material.model=" + model, "bodies[1].material.model=" + model});
+  ImpactWatch watch(&scene->model->system());
+  const CaseRun r = run_case(*scene, c, watch);
+  const Summary& s = r.result.summary;
+  ASSERT_TRUE(r.result.finished()) << r.what << " at speed " << p.speed << ": " << s.status;
+  for (const auto& violation : r.verdict.violations)
+    ADD_FAILURE() << r.what << " at speed " << p.speed << ", " << p.material << ": " << violation;
+  EXPECT_EQ(watch.inconsistent_steps(), 0) << watch.first_inconsistency();
+  ASSERT_TRUE(s.contact);
+  EXPECT_EQ(watch.events(), s.contact->contact_events);
+  EXPECT_GT(s.contact->contact_events, 0);
+}
+
+std::vector<SlideOff> slide_off_cases() {
+  std::vector<SlideOff> out;
+  for (double speed : {0.5, 1.0, 1.5, 2.5})
+    for (double factor : {1.0, 2.0})
+      for (const char* material : {"svk", "neo-hooke"}) out.push_back({speed, factor, material});
+  return out;
+}
+
+std::string slide_off_name(const ::testing::TestParamInfo<SlideOff>& info) {
+  const SlideOff& p = info.param;
+  std::string speed = std::to_string(p.speed).substr(0, 3);
+  speed[1] = '_';
+  return "speed" + speed + "_dt" + factor_name(p.dt_factor) + "_" +
+         (std::string(p.material) == "svk" ? "svk" : "neo_hooke");
+}
+
+INSTANTIATE_TEST_SUITE_P(Default, HardSlideOff, ::testing::ValuesIn(slide_off_cases()),
+                         slide_off_name);
 
 // The resting block: the scene as written (static solve, then 10^4 steps
 // of 0.02), judged as the catalogue is, and besides: no contact event at
