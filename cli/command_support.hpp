@@ -67,7 +67,7 @@ std::vector<std::string> split_list(const std::string& text);
 /// outcome through `agreed`. Returns kExitOk, or the code of the rank that
 /// refused; the folder made here for a job another rank refused is removed
 /// again.
-int make_shared_output_folder(const std::string& dir, bool root,
+int make_shared_output_folder(const std::string& dir, bool root, bool force,
                               const std::function<int(const std::string&)>& refuse,
                               const std::function<int(int)>& agreed,
                               std::unique_ptr<OutputFolder>& held);

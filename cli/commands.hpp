@@ -70,6 +70,7 @@ struct StudyOptions {
   std::string out_dir;                  // empty: out/<scene name>-study
   std::vector<std::string> overrides;
   bool quiet = false;
+  bool force = false;  // as for run and compare
   /// Runs at once, each on a thread of its own; 0: the hardware threads
   /// (under mpirun: 1 per rank). The results are those of one run after the
   /// other, whatever the number.

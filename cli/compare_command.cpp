@@ -128,7 +128,7 @@ int command_compare(const CompareOptions& options, std::ostream& out, std::ostre
   const std::string dir =
       options.out_dir.empty() ? "out/" + scene->settings.name + "-compare" : options.out_dir;
   std::unique_ptr<OutputFolder> locked;  // the folder, held until the command ends
-  if (const int code = make_shared_output_folder(dir, root, refuse, agreed, locked);
+  if (const int code = make_shared_output_folder(dir, root, options.force, refuse, agreed, locked);
       code != kExitOk)
     return code;
 

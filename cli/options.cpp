@@ -162,7 +162,8 @@ int emdae_main(int argc, char** argv) {
                     "Exit 4 when a scheme misses a [tolerances] check of the scene (without it "
                     "a comparison whose runs all finished exits 0)");
   compare->add_flag("--force", compare_options.force,
-                    "Run into output folders that hold files emdae did not write");
+                    "Run into an output folder that holds files emdae did not write (they are "
+                    "kept; emdae's earlier output is always replaced)");
   compare->footer(std::string(kExitCodesHelp) +
                   "\n\ncompare exits 0 when every run finished, whatever the [tolerances] "
                   "verdicts\n(each scheme's verdict is in compare.html and compare.json; "
@@ -220,6 +221,9 @@ int emdae_main(int argc, char** argv) {
   set_option(study, study_options.overrides);
   jobs_option(study, study_options.jobs, "runs");
   study->add_flag("-q,--quiet", study_options.quiet, "No progress lines and no table");
+  study->add_flag("--force", study_options.force,
+                  "Write into an output folder that holds files emdae did not write (they are "
+                  "kept; emdae's earlier output is always replaced)");
   study->footer(
       std::string(kExitCodesHelp) +
       "\n\n"

@@ -241,7 +241,7 @@ int worse(int current, int code) {
   return code == kExitBadInput ? kExitRunFailed : code;
 }
 
-int make_shared_output_folder(const std::string& dir, bool root,
+int make_shared_output_folder(const std::string& dir, bool root, bool force,
                               const std::function<int(const std::string&)>& refuse,
                               const std::function<int(int)>& agreed,
                               std::unique_ptr<OutputFolder>& held) {
@@ -249,9 +249,10 @@ int make_shared_output_folder(const std::string& dir, bool root,
   if (root) {  // the other ranks of an MPI job write nothing
     try {
       // Locked for the whole command (another study or compare into the same
-      // folder is refused); what is there stays: the runs' own folders
-      // clear their earlier output themselves.
-      held = std::make_unique<OutputFolder>(dir, /*force=*/true, /*clean=*/false);
+      // folder is refused) and, as a run's, cleared of emdae's earlier
+      // output (a run's, a comparison's with its schemes' folders, a
+      // study's); a file emdae did not write is refused, or kept with --force.
+      held = std::make_unique<OutputFolder>(dir, force);
     } catch (const OutputError& e) {
       return refuse(e.what());
     }

@@ -645,17 +645,38 @@ bool is_own_file_in(const std::string& folder, const std::string& file) {
   return name == "state.bin" || name == "run.json";  // checkpoint/
 }
 
-// An output folder's entries: an earlier run's files and subfolders, and the
-// first entry (at any depth) that no run wrote. Only regular files count as
-// a run's: a link or a folder at one of its names is someone else's.
+// The files a comparison and a study write at the top of their folder.
+const char* const kCommandFiles[] = {"compare.html", "compare.json", "study.csv", "study.json",
+                                     "study.html"};
+
+bool is_command_file(const std::string& name) {
+  for (const char* own : kCommandFiles)
+    if (name == own) return true;
+  return false;
+}
+
+// A comparison's folder of one scheme ("em"): a run's folder inside it.
+bool is_scheme_folder(const std::string& name) {
+  const auto known = known_schemes();
+  return std::find(known.begin(), known.end(), name) != known.end();
+}
+
+// An output folder's entries: the files and subfolders emdae wrote there (a
+// run's, a comparison's or a study's, whichever wrote it last), and the
+// first entry (at any depth) that emdae did not write. Only regular files
+// count as emdae's: a link or a folder at one of its names is someone else's.
 struct FolderContents {
-  std::vector<fs::path> own_files, own_folders;
-  std::string foreign;          // relative to the folder, "" when none
-  bool foreign_in_way = false;  // it has the name of a file or folder a run writes
+  std::vector<fs::path> own_files, own_folders;  // the folders deepest first
+  std::vector<fs::path> locks;                   // .emdae.lock of the schemes' runs of a comparison
+  std::string foreign;                           // relative to the folder, "" when none
+  bool foreign_in_way = false;  // it has the name of a file or folder emdae writes there
 };
 
-FolderContents folder_contents(const fs::path& dir) {
-  FolderContents c;
+// Adds what `dir` holds to `c`, its names shown after `shown` ("" for the
+// folder itself, whose lock is the caller's; "em/" for a scheme's run of a
+// comparison, whose lock goes to c.locks).
+void add_folder_contents(const fs::path& dir, const std::string& shown, FolderContents& c) {
+  const bool top = shown.empty();
   const auto note_foreign = [&c](const std::string& name, bool in_way) {
     if (c.foreign.empty() || (in_way && !c.foreign_in_way)) {
       c.foreign = name;
@@ -665,26 +686,44 @@ FolderContents folder_contents(const fs::path& dir) {
   std::error_code ec;
   for (const auto& e : fs::directory_iterator(dir, ec)) {
     const std::string name = e.path().filename().string();
-    if (name == ".emdae.lock") continue;
     const auto type = e.symlink_status().type();
-    if (type == fs::file_type::regular && is_own_file(without_temporary_suffix(name))) {
+    if (name == ".emdae.lock") {
+      if (!top) {
+        if (type == fs::file_type::regular)
+          c.locks.push_back(e.path());
+        else
+          note_foreign(shown + name, false);
+      }
+    } else if (type == fs::file_type::regular &&
+               (is_own_file(without_temporary_suffix(name)) ||
+                is_command_file(without_temporary_suffix(name)))) {
       c.own_files.push_back(e.path());
     } else if (type == fs::file_type::directory && is_own_folder(name)) {
-      c.own_folders.push_back(e.path());
       for (const auto& f : fs::directory_iterator(e.path(), ec)) {
         const std::string file = f.path().filename().string();
         if (f.symlink_status().type() == fs::file_type::regular && is_own_file_in(name, file))
           c.own_files.push_back(f.path());
         else
-          note_foreign(name + "/" + file, false);
+          note_foreign(shown + name + "/" + file, false);
       }
+      c.own_folders.push_back(e.path());
+    } else if (type == fs::file_type::directory && is_scheme_folder(name)) {
+      add_folder_contents(e.path(), shown + name + "/", c);
+      c.own_folders.push_back(e.path());
     } else {
-      note_foreign(name, is_own_file(name) || is_own_folder(name));
+      // Only at the top does the command write at one of its names.
+      note_foreign(shown + name,
+                   top && (is_own_file(name) || is_own_folder(name) || is_command_file(name)));
     }
   }
   if (ec)
     throw OutputError(
         fmt::format("cannot read output folder '{}': {}", dir.string(), ec.message()));
+}
+
+FolderContents folder_contents(const fs::path& dir) {
+  FolderContents c;
+  add_folder_contents(dir, "", c);
   return c;
 }
 
@@ -750,14 +789,45 @@ OutputFolder::OutputFolder(const std::string& dir, bool force, bool clean) {
     give_up();
     throw OutputError(why);
   }
+  // The folders of an earlier comparison's runs go too: each is held while
+  // it is emptied, as its run held it (one that another run holds now is
+  // refused, and nothing is removed).
+  std::vector<int> held;
+  const auto release = [&held] {
+    for (int fd : held) ::close(fd);
+    held.clear();
+  };
+  for (const auto& p : contents.locks) {
+    const int fd = ::open(p.c_str(), O_RDWR | O_CLOEXEC);
+    if (fd >= 0 && ::flock(fd, LOCK_EX | LOCK_NB) == 0) {
+      held.push_back(fd);
+      continue;
+    }
+    const int why = errno;
+    if (fd >= 0) ::close(fd);
+    release();
+    give_up();
+    throw OutputError(
+        fmt::format("output folder '{}' is in use by another emdae run ({}); give another --out",
+                    p.parent_path().string(),
+                    why == EWOULDBLOCK ? "it holds .emdae.lock" : std::strerror(why)));
+  }
   for (const auto& p : contents.own_files) {
     std::error_code ec;
     fs::remove(p, ec);
-    if (ec)
+    if (ec) {
+      release();
       throw OutputError(
           fmt::format("cannot remove the earlier run's '{}': {}", p.string(), ec.message()));
+    }
   }
-  // A subfolder goes when nothing but the run's files was in it.
+  // Their locks last, once nothing of theirs is left to remove.
+  for (const auto& p : contents.locks) {
+    std::error_code ec;
+    fs::remove(p, ec);
+  }
+  release();
+  // A subfolder goes when nothing but emdae's files was in it.
   for (const auto& p : contents.own_folders) {
     std::error_code ec;
     if (fs::is_empty(p, ec)) fs::remove(p, ec);

@@ -146,16 +146,19 @@ struct RunResult {
 /// OutputError naming it and why not.
 void create_output_folder(const std::string& dir);
 
-/// An output folder owned by one run: created, locked (flock on
-/// DIR/.emdae.lock, released when this is destroyed or the process ends),
-/// and cleared of an earlier run's output (history.csv, summary.json,
-/// report.html, contact.csv, fields.pvd, fields/step_*.vtu,
-/// trajectories.csv, trajectories.pvd, trajectories/step_*.vtp,
-/// checkpoint/state.bin and run.json, their temporary files). Throws
-/// OutputError when another run holds the folder, or when it holds a file
-/// emdae did not write (at any depth) and `force` is false; with `force`
-/// such files are kept. A refused folder is left as it was: no lock file,
-/// no folder made.
+/// An output folder owned by one run (or one comparison or study): created,
+/// locked (flock on DIR/.emdae.lock, released when this is destroyed or the
+/// process ends), and cleared of emdae's earlier output there: a run's
+/// (history.csv, summary.json, report.html, contact.csv, fields.pvd,
+/// fields/step_*.vtu, trajectories.csv, trajectories.pvd,
+/// trajectories/step_*.vtp, checkpoint/state.bin and run.json), a
+/// comparison's (compare.html, compare.json, and a run's folder per scheme,
+/// DIR/em/, ..., held while it is emptied) and a study's (study.csv,
+/// study.json, study.html), and their temporary files. Throws OutputError
+/// when another run holds the folder (or a scheme's folder in it), or when
+/// it holds a file emdae did not write (at any depth) and `force` is false;
+/// with `force` such files are kept. A refused folder is left as it was: no
+/// lock file, no folder made.
 class OutputFolder {
  public:
   /// `clean` false: keep what is there (a resumed run).

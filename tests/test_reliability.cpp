@@ -9,6 +9,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <csignal>
 #include <filesystem>
 #include <fstream>
@@ -425,8 +426,32 @@ TEST(OutputFolder, AStudyOrComparisonHoldsItsWholeFolder) {
   }
 }
 
-// A comparison whose scheme's run refused its folder (a file the user put
-// there) reports that run as not run: the earlier comparison's figures left
+// Every file under `folder` (relative path: its size and a hash of its
+// content) and every folder (relative path with a trailing '/': ""), to see
+// that nothing changed.
+std::map<std::string, std::string> files_of(const fs::path& folder) {
+  std::map<std::string, std::string> files;
+  for (const auto& e : fs::recursive_directory_iterator(folder)) {
+    const std::string name = fs::relative(e.path(), folder).string();
+    if (e.is_directory()) {
+      files[name + "/"] = "";
+    } else {
+      const std::string content = read_text(e.path());
+      files[name] = std::to_string(content.size()) + " bytes, hash " +
+                    std::to_string(std::hash<std::string>{}(content));
+    }
+  }
+  return files;
+}
+
+void write_file(const fs::path& path, const std::string& content) {
+  fs::create_directories(path.parent_path());
+  std::ofstream(path, std::ios::binary) << content;
+}
+
+// A comparison whose scheme's run refused its folder (something of the
+// user's at one of a run's names, which --force does not let a run write
+// over) reports that run as not run: the earlier comparison's figures left
 // in that folder are not its (an outside test saw them reported as "ok",
 // "meets the tolerances").
 TEST(OutputFolder, AComparisonDoesNotReportAnEarlierRunsFiguresForARefusedOne) {
@@ -436,11 +461,12 @@ TEST(OutputFolder, AComparisonDoesNotReportAnEarlierRunsFiguresForARefusedOne) {
   Result r = emdae(args, dir.path());
   ASSERT_EQ(r.code, 0) << r.output;
   ASSERT_TRUE(fs::exists(dir / "o/em/summary.json"));
-  std::ofstream(dir / "o/em/notes.txt") << "mine\n";
-  r = emdae(args, dir.path());
+  fs::remove(dir / "o/em/history.csv");
+  write_file(dir / "o/em/history.csv/notes.txt", "mine\n");
+  r = emdae(args + " --force", dir.path());
   EXPECT_NE(r.code, 0) << r.output;
-  EXPECT_TRUE(has(r.output, "notes.txt")) << r.output;
-  EXPECT_TRUE(fs::exists(dir / "o/em/notes.txt"));
+  EXPECT_TRUE(has(r.output, "history.csv")) << r.output;
+  EXPECT_TRUE(fs::exists(dir / "o/em/history.csv/notes.txt"));
   const auto runs = read_json(dir / "o/compare.json")["runs"];
   ASSERT_EQ(runs.size(), 2u) << runs;
   EXPECT_EQ(runs[0]["scheme"], "em");
@@ -448,6 +474,121 @@ TEST(OutputFolder, AComparisonDoesNotReportAnEarlierRunsFiguresForARefusedOne) {
   EXPECT_FALSE(runs[0].contains("status")) << runs[0];
   EXPECT_NE(runs[0]["verdict"], "meets the tolerances") << runs[0];
   EXPECT_EQ(runs[1]["status"], "ok") << runs[1];  // midpoint ran, its figures are its own
+}
+
+// The folder of a comparison or a study is under the rule of a run's: a
+// file emdae did not write, at its top or in a scheme's folder, refuses
+// the command before anything runs (exit 2, nothing written, no folder
+// made), or with --force (study has it too) is kept. An outside test saw
+// both write beside such files.
+TEST(OutputFolder, AComparisonOrStudyRefusesFilesEmdaeDidNotWrite) {
+  const std::string scene = quote(example("four_particle"));
+  for (const std::string& command : {"compare --schemes em,midpoint --t-end 0.1 " + scene,
+                                     "study --schemes em --dts 0.02,0.01 --t-end 0.1 " + scene}) {
+    TempDir dir;
+    const std::string args = command + " -q --out o";
+    write_file(dir / "o/notes.txt", "mine");
+    Result r = emdae(args, dir.path());
+    EXPECT_EQ(r.code, 2) << command << ": " << r.output;
+    EXPECT_TRUE(has(r.output, "holds 'notes.txt'")) << r.output;
+    EXPECT_TRUE(has(r.output, "--force")) << r.output;
+    const auto only_notes = std::map<std::string, std::string>{
+        {"notes.txt", "4 bytes, hash " + std::to_string(std::hash<std::string>{}("mine"))}};
+    EXPECT_EQ(files_of(dir / "o"), only_notes) << command << ": nothing written, no lock";
+
+    r = emdae(args + " --force", dir.path());
+    EXPECT_EQ(r.code, 0) << command << ": " << r.output;
+    EXPECT_EQ(read_text(dir / "o/notes.txt"), "mine");
+    EXPECT_TRUE(
+        fs::exists(dir / (command.rfind("compare", 0) == 0 ? "o/compare.json" : "o/study.json")));
+  }
+  // In a scheme's folder of an earlier comparison: refused whole, before
+  // any scheme runs.
+  TempDir dir;
+  const std::string args = "compare --schemes em,midpoint --t-end 0.1 " + scene + " -q --out o";
+  ASSERT_EQ(emdae(args, dir.path()).code, 0);
+  write_file(dir / "o/midpoint/notes.txt", "mine");
+  const auto before = files_of(dir / "o");
+  const Result r = emdae(args, dir.path());
+  EXPECT_EQ(r.code, 2) << r.output;
+  EXPECT_TRUE(has(r.output, "holds 'midpoint/notes.txt'")) << r.output;
+  EXPECT_EQ(files_of(dir / "o"), before) << "a refused comparison changes nothing";
+}
+
+// A second comparison into a folder replaces the first one's output whole:
+// the folder of a scheme it leaves out goes (an outside test found its old
+// results beside the new compare.json), but for files emdae did not write
+// (kept with --force); a scheme's folder another run holds refuses it.
+TEST(OutputFolder, ASecondComparisonReplacesTheFirstsSchemes) {
+  TempDir dir;
+  const std::string scene = quote(example("four_particle"));
+  const std::string both = "compare --schemes em,midpoint --t-end 0.1 " + scene + " -q --out o";
+  const std::string em = "compare --schemes em --t-end 0.1 " + scene + " -q --out o";
+  ASSERT_EQ(emdae(both, dir.path()).code, 0);
+  ASSERT_TRUE(fs::exists(dir / "o/midpoint/summary.json"));
+  Result r = emdae(em, dir.path());
+  ASSERT_EQ(r.code, 0) << r.output;
+  EXPECT_FALSE(fs::exists(dir / "o/midpoint")) << "the scheme left out";
+  EXPECT_TRUE(fs::exists(dir / "o/em/summary.json"));
+  EXPECT_EQ(read_json(dir / "o/compare.json")["runs"].size(), 1u);
+
+  ASSERT_EQ(emdae(both, dir.path()).code, 0);
+  write_file(dir / "o/midpoint/notes.txt", "mine");
+  r = emdae(em + " --force", dir.path());
+  ASSERT_EQ(r.code, 0) << r.output;
+  std::vector<std::string> left;
+  for (const auto& e : fs::directory_iterator(dir / "o/midpoint"))
+    left.push_back(e.path().filename());
+  EXPECT_EQ(left, std::vector<std::string>{"notes.txt"}) << "emdae's files go, the user's stay";
+
+  // A run holds the folder of a scheme the comparison would clear.
+  fs::remove(dir / "o/midpoint/notes.txt");
+  ASSERT_EQ(emdae(both, dir.path()).code, 0);
+  const int fd = ::open((dir / "o/midpoint/.emdae.lock").c_str(), O_RDWR | O_CREAT, 0644);
+  ASSERT_GE(fd, 0);
+  ASSERT_EQ(::flock(fd, LOCK_EX | LOCK_NB), 0);
+  const auto before = files_of(dir / "o");
+  r = emdae(em, dir.path());
+  ::close(fd);
+  EXPECT_EQ(r.code, 2) << r.output;
+  EXPECT_TRUE(has(r.output, "in use by another emdae run")) << r.output;
+  EXPECT_TRUE(has(r.output, "midpoint")) << r.output;
+  EXPECT_EQ(files_of(dir / "o"), before) << "nothing removed";
+}
+
+// A folder's earlier output is emdae's whichever command wrote it: a run's
+// files go when a comparison or a study writes there (an outside test
+// found them beside compare.json), and a study's or comparison's when a
+// run does (an outside test saw study.csv called "not emdae's").
+TEST(OutputFolder, EmdaesOutputOfAnotherCommandIsReplacedNotForeign) {
+  const std::string scene = quote(example("four_particle"));
+  const std::string run = "run " + scene + " -q --t-end 0.1 --out o";
+  const std::string compare = "compare --schemes em,midpoint --t-end 0.1 " + scene + " -q --out o";
+  const std::string study =
+      "study --schemes em --dts 0.02,0.01 --t-end 0.1 " + scene + " -q --out o";
+  const std::vector<std::string> run_files = {"history.csv",      "summary.json",
+                                              "report.html",      "trajectories.csv",
+                                              "trajectories.pvd", "trajectories"};
+  for (const std::string& group : {compare, study}) {
+    TempDir dir;
+    Result r = emdae(run, dir.path());
+    ASSERT_EQ(r.code, 0) << r.output;
+    r = emdae(group, dir.path());
+    ASSERT_EQ(r.code, 0) << group << ": " << r.output;
+    for (const auto& f : run_files)
+      EXPECT_FALSE(fs::exists(fs::path(dir / "o") / f)) << group << ": " << f;
+
+    r = emdae(run, dir.path());
+    EXPECT_EQ(r.code, 0) << group << ": " << r.output;
+    EXPECT_FALSE(has(r.output, "did not write")) << r.output;
+    std::vector<std::string> names;
+    for (const auto& e : fs::directory_iterator(dir / "o")) names.push_back(e.path().filename());
+    std::sort(names.begin(), names.end());
+    std::vector<std::string> expected = run_files;
+    expected.push_back(".emdae.lock");
+    std::sort(expected.begin(), expected.end());
+    EXPECT_EQ(names, expected) << group << ": the run's output alone";
+  }
 }
 
 TEST(OutputFolder, ASecondRunReplacesTheFirstRunsOutputWhole) {
@@ -477,29 +618,6 @@ TEST(OutputFolder, FilesEmdaeDidNotWriteNeedForceAndAreKept) {
   EXPECT_EQ(r.code, 0) << r.output;
   EXPECT_TRUE(fs::exists(dir / "history.csv"));
   EXPECT_EQ(read_text(dir / "notes.txt"), "mine");
-}
-
-// Every file under `folder` (relative path: its size and a hash of its
-// content) and every folder (relative path with a trailing '/': ""), to see
-// that nothing changed.
-std::map<std::string, std::string> files_of(const fs::path& folder) {
-  std::map<std::string, std::string> files;
-  for (const auto& e : fs::recursive_directory_iterator(folder)) {
-    const std::string name = fs::relative(e.path(), folder).string();
-    if (e.is_directory()) {
-      files[name + "/"] = "";
-    } else {
-      const std::string content = read_text(e.path());
-      files[name] = std::to_string(content.size()) + " bytes, hash " +
-                    std::to_string(std::hash<std::string>{}(content));
-    }
-  }
-  return files;
-}
-
-void write_file(const fs::path& path, const std::string& content) {
-  fs::create_directories(path.parent_path());
-  std::ofstream(path, std::ios::binary) << content;
 }
 
 // A file emdae did not write counts as foreign wherever it is, also inside
