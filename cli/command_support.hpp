@@ -57,13 +57,17 @@ int worse(int current, int code);
 /// message of what is wrong.
 std::vector<std::string> parse_schemes(const std::string& text, std::string& problem);
 
-/// The items of a comma-separated list, trimmed, empty ones dropped.
-std::vector<std::string> split_list(const std::string& text);
+/// The items of the comma-separated list `text` of `option`, trimmed; none
+/// when it holds nothing but blanks and commas. An empty item beside others
+/// ("a,,b", "a,") is refused: `problem` says so, naming the option.
+std::vector<std::string> split_list(const std::string& option, const std::string& text,
+                                    std::string& problem);
 
 /// The output folder of `compare` and `study` under an MPI job: rank 0
-/// (`root`) makes `dir` and locks it for as long as `held` lives (an
-/// OutputFolder that keeps what is there; a refusal, such as a folder
-/// another emdae holds, goes to `refuse`), then every rank agrees on the
+/// (`root`) makes `dir`, locks it for as long as `held` lives and clears it
+/// of emdae's earlier output, as a run's (an OutputFolder with `force`; a
+/// refusal, such as a folder another emdae holds or a file emdae did not
+/// write without --force, goes to `refuse`), then every rank agrees on the
 /// outcome through `agreed`. Returns kExitOk, or the code of the rank that
 /// refused; the folder made here for a job another rank refused is removed
 /// again.

@@ -198,20 +198,31 @@ int command_run(const RunOptions& options, std::ostream& out, std::ostream& err)
   return run_scene(options, out, err, record);
 }
 
-std::vector<std::string> split_list(const std::string& text) {
+std::vector<std::string> split_list(const std::string& option, const std::string& text,
+                                    std::string& problem) {
   std::vector<std::string> items;
-  std::string item;
-  std::istringstream in(text);
-  while (std::getline(in, item, ',')) {
+  if (text.find_first_not_of(" \t,") == std::string::npos) return items;  // none given
+  std::size_t start = 0;
+  while (true) {
+    const std::size_t comma = text.find(',', start);
+    std::string item = text.substr(start, comma == std::string::npos ? comma : comma - start);
     item.erase(0, item.find_first_not_of(" \t"));
     item.erase(item.find_last_not_of(" \t") + 1);
-    if (!item.empty()) items.push_back(item);
+    // "em,,midpoint" or "em,": a typo, not a shorter list.
+    if (item.empty()) {
+      problem = fmt::format("{}: an empty item in '{}' (two commas in a row, or a comma at an end)",
+                            option, text);
+      return {};
+    }
+    items.push_back(item);
+    if (comma == std::string::npos) return items;
+    start = comma + 1;
   }
-  return items;
 }
 
 std::vector<std::string> parse_schemes(const std::string& text, std::string& problem) {
-  const std::vector<std::string> schemes = split_list(text);
+  const std::vector<std::string> schemes = split_list("--schemes", text, problem);
+  if (!problem.empty()) return {};
   const auto known = known_schemes();
   std::string known_list;
   for (const auto& k : known) known_list += (known_list.empty() ? "" : ", ") + k;

@@ -44,7 +44,9 @@ std::optional<double> parse_number(const std::string& text) {
 std::vector<double> parse_values(const std::string& option, const std::string& text,
                                  const char* what, double upper, std::string& problem) {
   std::vector<double> values;
-  for (const auto& item : split_list(text)) {
+  const std::vector<std::string> items = split_list(option, text, problem);
+  if (!problem.empty()) return {};
+  for (const auto& item : items) {
     const auto x = parse_number(item);
     if (!x) {
       problem = fmt::format("{}: '{}' is not a number", option, item);
@@ -157,7 +159,9 @@ std::vector<NodeGroup> node_groups(const Model& model) {
 std::vector<std::string> parse_measures(const std::string& text, std::string& problem) {
   const auto& known = measure_families();
   std::vector<std::string> out;
-  for (const auto& item : split_list(text)) {
+  const std::vector<std::string> items = split_list("--measures", text, problem);
+  if (!problem.empty()) return {};
+  for (const auto& item : items) {
     if (std::find(known.begin(), known.end(), item) == known.end()) {
       std::string names;
       for (const auto& k : known) names += (names.empty() ? "" : ", ") + k;
@@ -177,7 +181,9 @@ std::vector<std::string> parse_measures(const std::string& text, std::string& pr
 // The times of --times: numbers, each once, in (0, t_end]; sorted.
 std::vector<double> parse_times(const std::string& text, double t_end, std::string& problem) {
   std::vector<double> out;
-  for (const auto& item : split_list(text)) {
+  const std::vector<std::string> items = split_list("--times", text, problem);
+  if (!problem.empty()) return {};
+  for (const auto& item : items) {
     const auto t = parse_number(item);
     if (!t) {
       problem = fmt::format("--times: '{}' is not a number", item);

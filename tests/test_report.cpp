@@ -475,6 +475,20 @@ TEST(Compare, UnknownSchemeIsBadInputAndNothingRuns) {
   EXPECT_FALSE(fs::exists(dir / "cmp"));
 }
 
+// "em,,midpoint" is a typo, not a list of two: an outside test saw it run.
+TEST(Compare, AnEmptySchemeItemIsBadInputAndNothingRuns) {
+  TempDir dir;
+  for (const char* schemes : {"em,,midpoint", "em,midpoint,", " ,em"}) {
+    const Result r = emdae("compare " + quote(example("double_pendulum")) + " --schemes '" +
+                           schemes + "' --out " + quote(dir / "cmp"));
+    EXPECT_EQ(r.code, 2) << schemes << ": " << r.output;
+    EXPECT_NE(r.output.find(std::string("--schemes: an empty item in '") + schemes + "'"),
+              std::string::npos)
+        << r.output;
+    EXPECT_FALSE(fs::exists(dir / "cmp"));
+  }
+}
+
 TEST(Compare, FailingSchemeIsShownAndTheOthersStillRun) {
   // IDA cannot meet tolerances of 1e-300 and fails at its first step; em
   // (which does not use them) runs. 5 steps end before the impact.
