@@ -3,6 +3,7 @@
 // [tolerances]. They fill RunSettings (run/run.hpp) under the same names.
 #include <algorithm>
 #include <cctype>
+#include <cmath>
 
 #include "integrators/contact_step.hpp"
 #include "scene/scene_reader.hpp"
@@ -253,6 +254,13 @@ void Builder::parse_output(const Fields& f) {
       if (times[i] < 0)
         f.fail_key("snapshots", fmt::format("must not hold negative times, received {}", times[i]));
       if (i > 0 && times[i] <= times[i - 1]) f.fail_key("snapshots", "must be increasing times");
+      // A time after the run's end would never be drawn (as the drawings'
+      // own test: within round-off of t_end is at t_end).
+      const double t_end = settings().time.t_end;
+      if (!settings().static_only && times[i] > t_end + 1e-9 * std::max(1.0, std::abs(t_end)))
+        f.fail_key("snapshots", fmt::format("must not hold times after time.t_end = {} (the run "
+                                            "ends there and draws nothing later), received {}",
+                                            show_number(t_end), show_number(times[i])));
     }
     settings().output.snapshots = times;
   }

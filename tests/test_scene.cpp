@@ -65,6 +65,12 @@ std::vector<Malformed> malformed_scenes() {
        "[time]\ndt = 0.1\nt_end = 1\nmin_dt = 0.5\n" + p,
        "min_dt",
        {"key 'time.min_dt'", "received 0.5"}},
+      // A drawing after the end of the run would never be made: an outside
+      // test found such times silently ignored.
+      {"snapshot_after_t_end",
+       "[time]\ndt = 0.1\nt_end = 1.0\n" + p + "[output]\nsnapshots = [0.5, 2.0]\n",
+       "snapshots",
+       {"key 'output.snapshots'", "after time.t_end = 1.0", "received 2.0"}},
       {"dt_is_string",
        "[time]\ndt = \"fast\"\nt_end = 1\n" + p,
        "dt =",
@@ -365,6 +371,14 @@ TEST(Scene, EmptyListOfSpringsIsAllowed) {
   TempDir dir;
   const auto scene = load_scene(dir.write("e.toml", "springs = []\n" + kValid));
   EXPECT_TRUE(scene->system().potentials().empty());
+}
+
+TEST(Scene, SnapshotsUpToTheEndOfTheRunAreAccepted) {
+  TempDir dir;
+  const std::string path =
+      dir.write("s.toml", "[time]\ndt = 0.1\nt_end = 1.0\n" + kParticles +
+                              "[output]\nsnapshots = [0.0, 0.5, 1.0000000001]\n");
+  EXPECT_EQ(load_scene(path)->settings.output.snapshots.size(), 3u);
 }
 
 TEST(Scene, IntegersAreAcceptedAsNumbers) {
