@@ -709,6 +709,28 @@ TEST(OutputFolder, CtrlCDuringAStaticAnalysisKeepsHistoryAndSummary) {
   EXPECT_TRUE(fs::exists(dir / "o/report.html"));
 }
 
+// Ctrl-C during a comparison: the interrupted scheme's checks were not
+// judged, and compare.json must not say they pass beside its "failed"
+// verdict (an outside test saw "checks_pass": true there).
+TEST(OutputFolder, CtrlCDuringAComparisonPassesNoChecks) {
+  TempDir dir;
+  const pid_t pid =
+      start("compare " + quote(example("free_ring")) + " --schemes em,midpoint --jobs 1 -q --out o",
+            dir.path());
+  const bool running = wait_until(pid, [&] { return lines_of(dir / "o/em/history.csv") > 20; });
+  ::kill(pid, SIGINT);
+  const int code = wait_exit(pid);
+  ASSERT_TRUE(running) << "the comparison ended before it could be interrupted";
+  EXPECT_EQ(code, 130);
+  EXPECT_EQ(read_json(dir / "o/em/summary.json")["checks"]["energy_rel"]["result"], "skipped");
+  const auto runs = read_json(dir / "o/compare.json")["runs"];
+  ASSERT_EQ(runs.size(), 1u) << runs;  // midpoint never started
+  EXPECT_EQ(runs[0]["scheme"], "em");
+  EXPECT_EQ(runs[0]["exit_code"], 130) << runs[0];
+  EXPECT_EQ(runs[0]["verdict"], "failed") << runs[0];
+  EXPECT_EQ(runs[0]["checks_pass"], false) << runs[0];
+}
+
 TEST(OutputFolder, AFullDiskWhileWritingFieldsIsNotASuccess) {
   TempDir dir;
   // A file size limit stands for a full disk: writes past it fail (EFBIG).

@@ -77,7 +77,10 @@ void write_comparison(const std::string& dir, const ReportInfo& info,
                 "{} {} &gt; {}", html_escape(cname),
                 c["value"].is_number() ? sci(c["value"].get<double>()) : std::string("?"),
                 c["limit"].is_number() ? sci(c["limit"].get<double>()) : std::string("?")));
-      v["checks_pass"] = s.contains("checks") ? Json(missed.empty()) : Json(nullptr);
+      // Checks pass only on a whole run: those of a run that failed or was
+      // interrupted were not judged (summary.cpp), and none of them passed.
+      v["checks_pass"] =
+          s.contains("checks") ? Json(status == "ok" && missed.empty()) : Json(nullptr);
       if (status != "ok") {
         verdict = "failed";
         sentence = "stopped: " + html_escape(status);
