@@ -164,6 +164,38 @@ void flatten(const toml::node& node, const std::string& key, std::string& out) {
   }
 }
 
+// The message of an error blamed on a place in the file `source`, naming
+// the command-line values that took part: a check between two values (t_end
+// at least dt) blames the file's line of one while the other came from
+// --set or --dt. Taking part: a value of the same table as the key blamed,
+// or one the message names.
+std::string with_overrides(const std::string& message, const std::string& source,
+                           const std::vector<SceneOverride>& overrides) {
+  if (overrides.empty() || message.rfind(source + ":", 0) != 0) return message;
+  const auto table_of = [](const std::string& key) {
+    const auto dot = key.rfind('.');
+    return dot == std::string::npos ? std::string() : key.substr(0, dot);
+  };
+  // "FILE:LINE:COLUMN: key 'KEY': WHAT"
+  std::string blamed;
+  if (const auto at = message.find(": key '"); at != std::string::npos)
+    if (const auto end = message.find("': ", at + 7); end != std::string::npos)
+      blamed = message.substr(at + 7, end - at - 7);
+  std::vector<std::string> notes;
+  for (const auto& o : overrides) {
+    std::string key = o.assignment.substr(0, o.assignment.find('='));
+    key.erase(0, key.find_first_not_of(" \t"));
+    key.erase(key.find_last_not_of(" \t") + 1);
+    if (key.empty()) continue;
+    const bool same_table = !table_of(key).empty() && table_of(key) == table_of(blamed);
+    if (!same_table && message.find(key) == std::string::npos) continue;
+    const std::string origin = o.origin.empty() ? "--set " + cut(o.assignment, 200) : o.origin;
+    notes.push_back(cut(key, 100) + " came from " + origin);
+  }
+  if (notes.empty()) return message;
+  return message + " (" + join(notes, "; ") + ")";
+}
+
 }  // namespace
 
 }  // namespace scene_reader
@@ -213,7 +245,13 @@ std::unique_ptr<Scene> load_scene_text(std::string_view text, const std::string&
   scene->settings.source = source_name;
   scene->settings.name = default_name(source_name);
   Builder builder(*scene, loc);
-  build(builder, loc, root);
+  try {
+    build(builder, loc, root);
+  } catch (const SceneError& e) {
+    std::string message = with_overrides(e.what(), source_name, overrides);
+    if (message == e.what()) throw;
+    throw SceneError(message);
+  }
   return scene;
 }
 

@@ -118,6 +118,25 @@ TEST(Reliability, SetIndexTooLargeForAnIntegerIsBadInput) {
   EXPECT_FALSE(has(r.output, "internal error")) << r.output;
 }
 
+// A --set that makes a value of the file wrong (t_end below the new dt):
+// the file's line is blamed, and the message says the other value came
+// from the --set (an outside test found it unnamed).
+TEST(Reliability, SetValueThatMakesAFileValueWrongIsNamed) {
+  TempDir dir;
+  const std::string scene = example("four_particle");
+  for (const char* command : {"check ", "run "}) {
+    const Result r = emdae(command + quote(scene) + " --set time.dt=10", dir.path());
+    EXPECT_EQ(r.code, 2) << r.output;
+    EXPECT_TRUE(has(r.output, scene + ":")) << r.output;
+    EXPECT_TRUE(has(r.output, "key 'time.t_end'")) << r.output;
+    EXPECT_TRUE(has(r.output, "time.dt came from --set time.dt=10")) << r.output;
+  }
+  const Result r = emdae("run " + quote(scene) + " --dt 10", dir.path());
+  EXPECT_EQ(r.code, 2) << r.output;
+  EXPECT_TRUE(has(r.output, "time.dt came from --dt 10")) << r.output;
+  EXPECT_FALSE(fs::exists(dir / "out"));
+}
+
 TEST(Reliability, SetValueWithALineBreakControlCharacterOrInvalidUtf8IsBadInput) {
   TempDir dir;
   for (const auto& [value, what] :

@@ -495,6 +495,43 @@ TEST(SceneOverrides, AreValidatedAndNamed) {
   }
 }
 
+// A value from the command line that makes another key of the file wrong:
+// the file's line of that key is blamed, and the message says which value
+// came from where (an outside test found the --set unnamed).
+TEST(SceneOverrides, AValueThatMakesAFileValueWrongIsNamed) {
+  TempDir dir;
+  const std::string path = dir.write("o.toml", kValid);
+  const auto message = [&](const std::vector<SceneOverride>& overrides) {
+    try {
+      load_scene(path, overrides);
+    } catch (const SceneError& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  // t_end = 0.1 in the file, on line 3, is below a dt of 0.5.
+  std::string m = message({{"scheme.name=midpoint", ""}, {"time.dt=0.5", ""}});
+  EXPECT_NE(m.find(path + ":3:"), std::string::npos) << m;
+  EXPECT_NE(m.find("key 'time.t_end'"), std::string::npos) << m;
+  EXPECT_NE(m.find("(time.dt came from --set time.dt=0.5)"), std::string::npos) << m;
+  EXPECT_EQ(m.find("scheme.name"), std::string::npos) << "not a part of it: " << m;
+  m = message({{"time.dt=0.5", "--dt 0.5"}});
+  EXPECT_NE(m.find("(time.dt came from --dt 0.5)"), std::string::npos) << m;
+  // Another table, named in the message.
+  m = message({{"limits.max_steps=5", ""}});
+  EXPECT_NE(m.find("key 'time.dt'"), std::string::npos) << m;
+  EXPECT_NE(m.find("(limits.max_steps came from --set limits.max_steps=5)"), std::string::npos)
+      << m;
+  // An error of the file alone names no override.
+  const std::string bad = dir.write("bad.toml", kValid + "[output]\nevery = 0\n");
+  try {
+    load_scene(bad, std::vector<SceneOverride>{{"scheme.name=midpoint", ""}});
+    FAIL();
+  } catch (const SceneError& e) {
+    EXPECT_EQ(std::string(e.what()).find("came from"), std::string::npos) << e.what();
+  }
+}
+
 TEST(Scene, ClosestMatch) {
   EXPECT_EQ(closest_match("dtt", {"dt", "t_end", "min_dt"}), "dt");
   EXPECT_EQ(closest_match("lenght", {"length", "between"}), "length");
