@@ -117,6 +117,11 @@ double System::unilateral_gap(int id, const Vec& q) const {
   return unilateral_[static_cast<std::size_t>(set)]->gap(i, q);
 }
 
+double System::unilateral_overlap_gap(int id, const Vec& q) const {
+  const auto [set, i] = unilateral_candidate(id);
+  return unilateral_[static_cast<std::size_t>(set)]->overlap_gap(i, q);
+}
+
 double System::unilateral_penalty(int id) const {
   const auto [set, i] = unilateral_candidate(id);
   return unilateral_[static_cast<std::size_t>(set)]->penalty(i);

@@ -95,6 +95,8 @@ class System {
   const Term* unilateral_term(int id) const;
   /// Its gap at q, +infinity when not engaged (UnilateralConstraints::gap).
   double unilateral_gap(int id, const Vec& q) const;
+  /// UnilateralConstraints::overlap_gap of candidate id: how far it lies inside.
+  double unilateral_overlap_gap(int id, const Vec& q) const;
   /// Its penalty stiffness (UnilateralConstraints::penalty), 0 when exact.
   double unilateral_penalty(int id) const;
   /// True when some candidate is penalized.

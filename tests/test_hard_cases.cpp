@@ -264,6 +264,11 @@ TEST_P(HardSlideOff, ReleasesTheNodesLeavingTheMastersEnd) {
   ASSERT_TRUE(s.contact);
   EXPECT_EQ(watch.events(), s.contact->contact_events);
   EXPECT_GT(s.contact->contact_events, 0);
+  // What the coverage barrier lets a partly covered node carry as a
+  // weighted overlap (a master corner inside the slave face, O(c1 theta h);
+  // measured up to 2.3e-4 on these cases): within 1 % of the slider's
+  // element length (0.4 / 7).
+  EXPECT_LE(s.contact->overlap_max, 1e-2 * 0.4 / 7) << r.what << " at speed " << p.speed;
 }
 
 std::vector<SlideOff> slide_off_cases() {

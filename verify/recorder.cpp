@@ -177,6 +177,11 @@ void Recorder::measure_contact(const State& state, Sample& s) {
     const double phi = system_.unilateral_gap(id, state.q);
     if (std::isnan(phi) || phi < 0) keep_max(s.penetration, -phi);
   }
+  for (int id = 0; id < system_.n_unilateral(); ++id) {
+    if (system_.unilateral_penalty(id) > 0.0) continue;
+    const double overlap = system_.unilateral_overlap_gap(id, state.q);
+    if (std::isnan(overlap) || overlap < 0) keep_max(overlap_max_, -overlap);
+  }
   if (s.active_contacts > 0) {
     if (std::isnan(contact_first_)) contact_first_ = s.t;
     contact_last_ = s.t;
@@ -389,7 +394,8 @@ void Recorder::save(std::ostream& out) const {
                    balance_error_max_, free_ref_,           free_ref_scale_,      free_time_,
                    free_error_max_,    linear_balance_max_, angular_balance_max_, angular_size_max_,
                    angular_reach_max_, gap_violation_max_,  penetration_max_,     contact_first_,
-                   contact_last_,      linear_error_max_,   angular_error_max_,   constraint_max_})
+                   contact_last_,      linear_error_max_,   angular_error_max_,   constraint_max_,
+                   overlap_max_})
     put(out, x);
   put(out, in_free_);
   put(out, free_intervals_);
@@ -417,7 +423,8 @@ void Recorder::restore(std::istream& in) {
         &balance_error_max_, &free_ref_,           &free_ref_scale_,      &free_time_,
         &free_error_max_,    &linear_balance_max_, &angular_balance_max_, &angular_size_max_,
         &angular_reach_max_, &gap_violation_max_,  &penetration_max_,     &contact_first_,
-        &contact_last_,      &linear_error_max_,   &angular_error_max_,   &constraint_max_})
+        &contact_last_,      &linear_error_max_,   &angular_error_max_,   &constraint_max_,
+        &overlap_max_})
     *x = get<double>(in);
   in_free_ = get<bool>(in);
   free_intervals_ = get<int>(in);

@@ -164,6 +164,12 @@ class Recorder {
   int active_contacts_max() const { return active_max_; }
   double gap_violation_max() const { return gap_violation_max_; }
   double penetration_max() const { return penetration_max_; }
+  /// max(0, -g_A / W_A) over the exact candidates, active or not: the
+  /// weighted gap without the coverage barrier
+  /// (UnilateralConstraints::overlap_gap), which the barrier lets a partly
+  /// covered node carry (at a master's end: a master corner inside the
+  /// slave face, docs/contact.md).
+  double overlap_max() const { return overlap_max_; }
   long contact_events() const { return contact_events_; }
   /// First and last time with an active candidate; NaN when there was none.
   double contact_first() const { return contact_first_; }
@@ -226,7 +232,7 @@ class Recorder {
   double angular_reach_max_ = 0.0;
   // Contact.
   int active_max_ = 0;
-  double gap_violation_max_ = 0.0, penetration_max_ = 0.0;
+  double gap_violation_max_ = 0.0, penetration_max_ = 0.0, overlap_max_ = 0.0;
   long contact_events_ = 0;
   double contact_first_ = std::numeric_limits<double>::quiet_NaN();
   double contact_last_ = std::numeric_limits<double>::quiet_NaN();

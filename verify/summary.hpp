@@ -62,6 +62,7 @@ struct ContactFigures {
   int active_contacts_max = 0;
   double gap_violation_max = 0.0;  // max |Phi| over active candidates
   double penetration_max = 0.0;    // max(0, -Phi) over inactive and penalized candidates
+  double overlap_max = 0.0;        // Recorder::overlap_max(): without the coverage barrier
   long contact_events = 0;
 };
 
