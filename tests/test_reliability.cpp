@@ -742,6 +742,8 @@ TEST(OutputFolder, CtrlCDuringAComparisonPassesNoChecks) {
   ASSERT_TRUE(running) << "the comparison ended before it could be interrupted";
   EXPECT_EQ(code, 130);
   EXPECT_EQ(read_json(dir / "o/em/summary.json")["checks"]["energy_rel"]["result"], "skipped");
+  // Nor does the run's own summary (it said true until 2026-11-28).
+  EXPECT_EQ(read_json(dir / "o/em/summary.json")["checks_pass"], false);
   const auto runs = read_json(dir / "o/compare.json")["runs"];
   ASSERT_EQ(runs.size(), 1u) << runs;  // midpoint never started
   EXPECT_EQ(runs[0]["scheme"], "em");

@@ -741,14 +741,14 @@ void write_report(const std::string& dir, const ReportInfo& info, const Summary&
 
   html += "<section id=\"checks\">\n<h2>Checks against the scene's tolerances</h2>\n";
   if (!summary.checks.empty()) {
-    // A run that stopped early is judged on what it covered: say so.
-    const std::string until =
-        summary.ok() ? ""
-                     : fmt::format(" up to t = {:g}, where the run stopped", summary.t_reached);
-    html += fmt::format("<p>{}{}</p>\n",
-                        summary.checks_pass() ? mark("pass") + " every declared tolerance is met"
-                                              : mark("fail") + " a declared tolerance is exceeded",
-                        until);
+    // A run that stopped early is not judged (its checks are skipped).
+    if (!summary.ok())
+      html += fmt::format("<p>{} not judged: the run stopped at t = {:g}</p>\n", mark("skipped"),
+                          summary.t_reached);
+    else
+      html += fmt::format("<p>{}</p>\n", summary.checks_pass()
+                                             ? mark("pass") + " every declared tolerance is met"
+                                             : mark("fail") + " a declared tolerance is exceeded");
   }
   html += checks_html(json) + "</section>\n";
 

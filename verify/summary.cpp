@@ -95,6 +95,9 @@ std::string pressure_text(const PairPressure& p) {
 }  // namespace
 
 bool Summary::checks_pass() const {
+  // The checks of a run that failed or was interrupted were not judged
+  // ("skipped"): none of them passed.
+  if (!ok()) return false;
   for (const auto& c : checks)
     if (c.result == "fail") return false;
   return true;

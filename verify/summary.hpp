@@ -130,6 +130,7 @@ struct Summary {
   std::vector<Check> checks;
 
   bool ok() const { return status == "ok"; }
+  /// The run finished (ok()) and no check failed.
   bool checks_pass() const;
 };
 
