@@ -1,5 +1,6 @@
 #include "contact/mortar_contact.hpp"
 
+#include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -14,6 +15,56 @@ namespace {
 
 Eigen::Vector2d node_position(const Vec& q, int node) {
   return q.segment<2>(2 * node);
+}
+
+// How far p lies behind the chain `edges` (body on each edge's left), or 0
+// (in front, or nearest to an open end of the chain). Brute force over the
+// edges; `box` is the chain's bounding box at q grown by four of its mean
+// edge lengths (p outside it: 0). A node that sinks deeper has passed that
+// band, continuously, and the recorder's maximum has it from there.
+double depth_behind(const std::vector<std::array<int, 2>>& edges, const Vec& q,
+                    const Eigen::Vector2d& p, const Eigen::AlignedBox2d& box) {
+  if (!box.contains(p)) return 0.0;
+  double best = std::numeric_limits<double>::infinity();
+  std::size_t best_edge = 0;
+  double best_t = 0.0;
+  for (std::size_t e = 0; e < edges.size(); ++e) {
+    const Eigen::Vector2d a = node_position(q, edges[e][0]), d = node_position(q, edges[e][1]) - a;
+    const double dd = d.squaredNorm();
+    const double t = dd > 0.0 ? std::clamp((p - a).dot(d) / dd, 0.0, 1.0) : 0.0;
+    const double dist = (a + t * d - p).squaredNorm();
+    if (dist < best) best = dist, best_edge = e, best_t = t;
+  }
+  const auto outward = [&](std::size_t e) {
+    const Eigen::Vector2d d = node_position(q, edges[e][1]) - node_position(q, edges[e][0]);
+    return Eigen::Vector2d(d.y(), -d.x()).normalized();
+  };
+  const std::array<int, 2>& edge = edges[best_edge];
+  if (best_t > 0.0 && best_t < 1.0) {
+    const Eigen::Vector2d a = node_position(q, edge[0]);
+    return (p - a).dot(outward(best_edge)) < 0.0 ? std::sqrt(best) : 0.0;
+  }
+  // The nearest point is a vertex: its two edges' outward normals summed.
+  const int vertex = best_t <= 0.0 ? edge[0] : edge[1];
+  Eigen::Vector2d normal = Eigen::Vector2d::Zero();
+  int sharing = 0;
+  for (std::size_t e = 0; e < edges.size(); ++e)
+    if (edges[e][0] == vertex || edges[e][1] == vertex) normal += outward(e), ++sharing;
+  if (sharing < 2) return 0.0;  // an open end: not decided
+  return (p - node_position(q, vertex)).dot(normal) < 0.0 ? std::sqrt(best) : 0.0;
+}
+
+Eigen::AlignedBox2d chain_box(const std::vector<std::array<int, 2>>& edges, const Vec& q) {
+  Eigen::AlignedBox2d box;
+  double length = 0.0;
+  for (const auto& e : edges) {
+    for (int node : e) box.extend(node_position(q, node));
+    length += (node_position(q, e[1]) - node_position(q, e[0])).norm();
+  }
+  const double margin = 4.0 * length / static_cast<double>(edges.size());
+  box.min().array() -= margin;
+  box.max().array() += margin;
+  return box;
 }
 
 }  // namespace
@@ -64,6 +115,21 @@ MortarContact::MortarContact(const System& system, ContactSurface slave, Contact
   }
   mean_master_length_ /= static_cast<double>(master_.edges.size());
   terms_.resize(slave_nodes_.size());
+  for (const auto& e : master_.edges)
+    for (int node : e)
+      if (std::find(master_nodes_.begin(), master_nodes_.end(), node) == master_nodes_.end())
+        master_nodes_.push_back(node);
+}
+
+double MortarContact::surface_depth(const Vec& q) const {
+  double depth = 0.0;
+  const Eigen::AlignedBox2d master_box = chain_box(master_.edges, q);
+  for (int node : slave_nodes_)
+    depth = std::max(depth, depth_behind(master_.edges, q, node_position(q, node), master_box));
+  const Eigen::AlignedBox2d slave_box = chain_box(slave_.edges, q);
+  for (int node : master_nodes_)
+    depth = std::max(depth, depth_behind(slave_.edges, q, node_position(q, node), slave_box));
+  return depth;
 }
 
 std::string MortarContact::describe(int i) const {

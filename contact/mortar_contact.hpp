@@ -56,6 +56,13 @@ class MortarContact final : public UnilateralConstraints {
   /// The normalized weighted gap g_A / W_A alone (no coverage barrier), or
   /// +infinity where gap() is.
   double overlap_gap(int i, const Vec& q) const override;
+  /// Each slave node's closest point on the master chain and each master
+  /// node's on the slave chain: a node is behind a chain where it lies on
+  /// the body's side of the closest edge's interior (edges have the body on
+  /// their left) or behind the closest vertex's pseudo-normal (the sum of
+  /// its two edges' outward normals); at a chain's open end it is not
+  /// decided (counted as outside). Returns the largest such distance.
+  double surface_depth(const Vec& q) const override;
   std::string describe(int i) const override;
   /// epsilon w_A when the contact is penalized, else 0.
   double penalty(int i) const override;
@@ -77,6 +84,7 @@ class MortarContact final : public UnilateralConstraints {
   ContactSurface slave_, master_;
   ContactOptions options_;
   std::vector<int> slave_nodes_;
+  std::vector<int> master_nodes_;               // for surface_depth()
   std::vector<std::array<int, 2>> node_edges_;  // slave edges at each slave node (-1: none)
   std::vector<double> weights_;
   double mean_master_length_ = 0.0;

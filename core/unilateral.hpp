@@ -41,6 +41,10 @@ class UnilateralConstraints {
   /// overlap (the mortar coverage barrier); +infinity where gap() is. For
   /// the check that bodies do not overlap at the start.
   virtual double overlap_gap(int i, const Vec& q) const { return gap(i, q); }
+  /// The deepest a surface node of either side lies behind the other side's
+  /// surface at q, as a distance (geometric, not weighted); 0 when none is
+  /// or when the set has no surfaces.
+  virtual double surface_depth(const Vec& /*q*/) const { return 0.0; }
   /// Describes candidate i for messages ("slave node 17 of ring_a").
   virtual std::string describe(int i) const = 0;
   /// Penalty stiffness k_i of candidate i, or 0 (the default) for an exact

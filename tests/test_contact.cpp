@@ -19,6 +19,7 @@
 
 #include "contact/jet.hpp"
 #include "contact/mortar.hpp"
+#include "contact/mortar_contact.hpp"
 #include "contact/search.hpp"
 #include "core/gradient.hpp"
 #include "core/load.hpp"
@@ -588,6 +589,48 @@ void print(const char* what, const Summary& f) {
       f.angular_momentum_rel_error_max.value_or(-1), f.contact->gap_violation_max,
       f.contact->penetration_max, f.contact->active_contacts_max, f.contact->first.value_or(-1),
       f.contact->last.value_or(-1));
+}
+
+// The geometric depth of MortarContact::surface_depth: a master unit square
+// (nodes 0..3, counter-clockwise, the body on each edge's left) and a slave
+// segment (4, 5), the bottom face of a body above it (its body on the
+// segment's left too). Behind an edge's interior the depth is the distance
+// to the edge; in front, 0; nearest an open end of a chain (the square's top
+// face alone as master, or the slave segment's ends), not decided: 0. The
+// master nodes are measured against the slave chain as well.
+TEST(MortarContact, SurfaceDepthIsTheDeepestNodeBehindTheOtherSurface) {
+  System s(2);
+  for (const auto& [x, y] : {std::pair{0.0, 0.0}, {1.0, 0.0}, {1.0, 1.0}, {0.0, 1.0}})
+    s.add_node(Eigen::Vector2d(x, y), Eigen::Vector2d::Zero());
+  s.add_node(Eigen::Vector2d(0.5, 1.5), Eigen::Vector2d::Zero());  // 4, moved about
+  s.add_node(Eigen::Vector2d(3.0, 1.5), Eigen::Vector2d::Zero());  // 5, right of the square
+  const ContactSurface slave{"slave", {{4, 5}}};
+  const ContactSurface square{"square", {{0, 1}, {1, 2}, {2, 3}, {3, 0}}};
+  const ContactSurface top{"top", {{2, 3}}};
+  const MortarContact closed(s, slave, square, "closed");
+  const MortarContact open(s, slave, top, "open");
+  Vec q = s.initial_positions();
+  const auto at = [&](double x, double y) {
+    q.segment<2>(8) = Eigen::Vector2d(x, y);
+    return std::pair{closed.surface_depth(q), open.surface_depth(q)};
+  };
+  EXPECT_EQ(at(0.5, 1.5).first, 0.0);              // in front of the top
+  EXPECT_NEAR(at(0.5, 0.9).first, 0.1, 1e-15);     // behind the top's interior
+  EXPECT_NEAR(at(0.5, 0.9).second, 0.1, 1e-15);    // the top alone: the same
+  EXPECT_NEAR(at(0.95, 0.97).first, 0.03, 1e-15);  // nearest the top, near a corner
+  EXPECT_EQ(at(1.1, 1.1).first, 0.0);              // outside, nearest the corner (1, 1)
+  EXPECT_EQ(at(1.1, 0.9).second, 0.0);             // beside the top's open end
+  // A master corner behind the slave segment: 4 above the top, 5 low on
+  // the right, the segment passing below the corner (1, 1).
+  q.segment<2>(8) = Eigen::Vector2d(0.5, 1.05);
+  q.segment<2>(10) = Eigen::Vector2d(3.0, 0.5);
+  const Eigen::Vector2d a(0.5, 1.05), d = Eigen::Vector2d(3.0, 0.5) - a, corner(1.0, 1.0);
+  const double t = (corner - a).dot(d) / d.squaredNorm();
+  ASSERT_GT(t, 0.0);
+  ASSERT_LT(t, 1.0);
+  const double behind = (a + t * d - corner).norm();
+  EXPECT_GT(behind, 0.05);
+  EXPECT_NEAR(closed.surface_depth(q), behind, 1e-15);
 }
 
 TEST(RingImpact, EnergyMomentumConservesThroughImpact) {

@@ -182,6 +182,8 @@ void Recorder::measure_contact(const State& state, Sample& s) {
     const double overlap = system_.unilateral_overlap_gap(id, state.q);
     if (std::isnan(overlap) || overlap < 0) keep_max(overlap_max_, -overlap);
   }
+  for (const auto& set : system_.unilateral())
+    keep_max(surface_depth_max_, set->surface_depth(state.q));
   if (s.active_contacts > 0) {
     if (std::isnan(contact_first_)) contact_first_ = s.t;
     contact_last_ = s.t;
@@ -395,7 +397,7 @@ void Recorder::save(std::ostream& out) const {
                    free_error_max_,    linear_balance_max_, angular_balance_max_, angular_size_max_,
                    angular_reach_max_, gap_violation_max_,  penetration_max_,     contact_first_,
                    contact_last_,      linear_error_max_,   angular_error_max_,   constraint_max_,
-                   overlap_max_})
+                   overlap_max_,       surface_depth_max_})
     put(out, x);
   put(out, in_free_);
   put(out, free_intervals_);
@@ -424,7 +426,7 @@ void Recorder::restore(std::istream& in) {
         &free_error_max_,    &linear_balance_max_, &angular_balance_max_, &angular_size_max_,
         &angular_reach_max_, &gap_violation_max_,  &penetration_max_,     &contact_first_,
         &contact_last_,      &linear_error_max_,   &angular_error_max_,   &constraint_max_,
-        &overlap_max_})
+        &overlap_max_,       &surface_depth_max_})
     *x = get<double>(in);
   in_free_ = get<bool>(in);
   free_intervals_ = get<int>(in);

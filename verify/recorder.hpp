@@ -170,6 +170,9 @@ class Recorder {
   /// covered node carry (at a master's end: a master corner inside the
   /// slave face, docs/contact.md).
   double overlap_max() const { return overlap_max_; }
+  /// The deepest a contact surface node lay behind the other surface
+  /// (UnilateralConstraints::surface_depth): geometric, not weighted.
+  double surface_depth_max() const { return surface_depth_max_; }
   long contact_events() const { return contact_events_; }
   /// First and last time with an active candidate; NaN when there was none.
   double contact_first() const { return contact_first_; }
@@ -233,6 +236,7 @@ class Recorder {
   // Contact.
   int active_max_ = 0;
   double gap_violation_max_ = 0.0, penetration_max_ = 0.0, overlap_max_ = 0.0;
+  double surface_depth_max_ = 0.0;
   long contact_events_ = 0;
   double contact_first_ = std::numeric_limits<double>::quiet_NaN();
   double contact_last_ = std::numeric_limits<double>::quiet_NaN();

@@ -160,6 +160,7 @@ Summary summarize(const RunInfo& info, const System& system, const Recorder& rec
     c.gap_violation_max = recorder.gap_violation_max();
     c.penetration_max = recorder.penetration_max();
     c.overlap_max = recorder.overlap_max();
+    c.surface_depth_max = recorder.surface_depth_max();
     c.contact_events = recorder.contact_events();
     s.contact = c;
   }
@@ -325,6 +326,7 @@ nlohmann::ordered_json static_json(const Summary& s) {
     j["gap_violation_max"] = s.contact->gap_violation_max;
     j["penetration_max"] = s.contact->penetration_max;
     j["overlap_max"] = s.contact->overlap_max;
+    j["surface_depth_max"] = s.contact->surface_depth_max;
     if (!s.contact_pressure.empty()) j["contact_pressure"] = pressure_json(s.contact_pressure);
   }
   if (s.statics) j["statics"] = statics_json(*s.statics);
@@ -401,6 +403,7 @@ nlohmann::ordered_json to_json(const Summary& s) {
     j["gap_violation_max"] = c.gap_violation_max;
     j["penetration_max"] = c.penetration_max;
     j["overlap_max"] = c.overlap_max;
+    j["surface_depth_max"] = c.surface_depth_max;
     j["contact_events"] = c.contact_events;
     if (!s.contact_pressure.empty()) j["contact_pressure"] = pressure_json(s.contact_pressure);
   }
@@ -479,6 +482,10 @@ void print_summary(std::ostream& out, const Summary& s, const std::string& dir, 
                          : std::string("none"));
     row("gap violation, penetration",
         fmt::format("{:.3e}, {:.3e}", c.gap_violation_max, c.penetration_max));
+    row("surface depth",
+        fmt::format("{:.3e} (the deepest a surface node lay behind the other surface, "
+                    "geometric)",
+                    c.surface_depth_max));
     // Shown where the coverage barrier hides some: partly covered nodes.
     if (c.overlap_max > std::max(c.penetration_max, c.gap_violation_max))
       row("weighted overlap",

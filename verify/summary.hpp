@@ -63,6 +63,7 @@ struct ContactFigures {
   double gap_violation_max = 0.0;  // max |Phi| over active candidates
   double penetration_max = 0.0;    // max(0, -Phi) over inactive and penalized candidates
   double overlap_max = 0.0;        // Recorder::overlap_max(): without the coverage barrier
+  double surface_depth_max = 0.0;  // Recorder::surface_depth_max(): geometric
   long contact_events = 0;
 };
 
