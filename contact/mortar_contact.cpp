@@ -140,20 +140,20 @@ double MortarContact::penalty(int i) const {
   return options_.penalty * weights_[static_cast<std::size_t>(i)];
 }
 
-double MortarContact::gap(int i, const Vec& q) const {
+double MortarContact::engaged_value(int i, const Vec& q, bool with_barrier) const {
   const MortarGapTerm* t = terms_[static_cast<std::size_t>(i)].get();
   if (!t) return std::numeric_limits<double>::infinity();
   Vec local;
   gather(*t, q, local);
-  return t->engaged_value(local);
+  return t->engaged_value(local, with_barrier);
+}
+
+double MortarContact::gap(int i, const Vec& q) const {
+  return engaged_value(i, q, true);
 }
 
 double MortarContact::overlap_gap(int i, const Vec& q) const {
-  const MortarGapTerm* t = terms_[static_cast<std::size_t>(i)].get();
-  if (!t) return std::numeric_limits<double>::infinity();
-  Vec local;
-  gather(*t, q, local);
-  return t->engaged_value(local, false);
+  return engaged_value(i, q, false);
 }
 
 MortarGapTerm::CurrentWeight MortarContact::current_weight(int i, const Vec& q) const {

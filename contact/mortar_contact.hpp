@@ -80,6 +80,10 @@ class MortarContact final : public UnilateralConstraints {
   long n_box_tests() const { return grid_.tests(); }
 
  private:
+  /// MortarGapTerm::engaged_value of candidate i at q (global), +infinity
+  /// without a function.
+  double engaged_value(int i, const Vec& q, bool with_barrier) const;
+
   std::string name_;
   ContactSurface slave_, master_;
   ContactOptions options_;

@@ -743,6 +743,23 @@ std::string foreign_refusal(const std::string& dir, const FolderContents& c, boo
       dir, c.foreign);
 }
 
+// An exclusive, non-blocking flock on the lock file `path` (made when
+// `create`): its descriptor, or -1 with `why` the errno and `opened` whether
+// it was the flock that failed (the file opened) rather than the open.
+int lock_exclusive(const std::string& path, bool create, int& why, bool& opened) {
+  const int fd = ::open(path.c_str(), O_RDWR | O_CLOEXEC | (create ? O_CREAT : 0), 0644);
+  opened = fd >= 0;
+  if (opened && ::flock(fd, LOCK_EX | LOCK_NB) == 0) return fd;
+  why = errno;
+  if (opened) ::close(fd);
+  return -1;
+}
+
+std::string in_use(const std::string& dir, int why) {
+  return fmt::format("output folder '{}' is in use by another emdae run ({}); give another --out",
+                     dir, why == EWOULDBLOCK ? "it holds .emdae.lock" : std::strerror(why));
+}
+
 }  // namespace
 
 bool is_run_output(const std::string& name) {
@@ -768,27 +785,22 @@ OutputFolder::OutputFolder(const std::string& dir, bool force, bool clean) {
     if (!had_lock) fs::remove(lock, ec);
     if (made) fs::remove(dir, ec);
   };
-  lock_fd_ = ::open(lock.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
+  int why = 0;
+  bool opened = false;
+  lock_fd_ = lock_exclusive(lock, true, why, opened);
   if (lock_fd_ < 0) {
-    const int why = errno;
+    // Held: the lock file is the other run's, it stays.
+    if (opened) throw OutputError(in_use(dir, why));
     give_up();
     throw OutputError(fmt::format("cannot lock output folder '{}': {}", dir, std::strerror(why)));
-  }
-  if (::flock(lock_fd_, LOCK_EX | LOCK_NB) != 0) {
-    const int why = errno;
-    ::close(lock_fd_);
-    lock_fd_ = -1;  // the lock file is the other run's: it stays
-    throw OutputError(
-        fmt::format("output folder '{}' is in use by another emdae run ({}); give another --out",
-                    dir, why == EWOULDBLOCK ? "it holds .emdae.lock" : std::strerror(why)));
   }
   if (!clean) return;  // a resumed run goes on with what is there
   // The folder is ours: an earlier run's output goes, anything else (at any
   // depth) stays and needs --force (it may be the user's).
   const FolderContents contents = folder_contents(dir);
-  if (const std::string why = foreign_refusal(dir, contents, force); !why.empty()) {
+  if (const std::string refusal = foreign_refusal(dir, contents, force); !refusal.empty()) {
     give_up();
-    throw OutputError(why);
+    throw OutputError(refusal);
   }
   // The folders of an earlier comparison's runs go too: each is held while
   // it is emptied, as its run held it (one that another run holds now is
@@ -799,19 +811,13 @@ OutputFolder::OutputFolder(const std::string& dir, bool force, bool clean) {
     held.clear();
   };
   for (const auto& p : contents.locks) {
-    const int fd = ::open(p.c_str(), O_RDWR | O_CLOEXEC);
-    if (fd >= 0 && ::flock(fd, LOCK_EX | LOCK_NB) == 0) {
+    if (const int fd = lock_exclusive(p.string(), false, why, opened); fd >= 0) {
       held.push_back(fd);
       continue;
     }
-    const int why = errno;
-    if (fd >= 0) ::close(fd);
     release();
     give_up();
-    throw OutputError(
-        fmt::format("output folder '{}' is in use by another emdae run ({}); give another --out",
-                    p.parent_path().string(),
-                    why == EWOULDBLOCK ? "it holds .emdae.lock" : std::strerror(why)));
+    throw OutputError(in_use(p.parent_path().string(), why));
   }
   for (const auto& p : contents.own_files) {
     std::error_code ec;

@@ -77,10 +77,10 @@ void write_comparison(const std::string& dir, const ReportInfo& info,
                 "{} {} &gt; {}", html_escape(cname),
                 c["value"].is_number() ? sci(c["value"].get<double>()) : std::string("?"),
                 c["limit"].is_number() ? sci(c["limit"].get<double>()) : std::string("?")));
-      // Checks pass only on a whole run: those of a run that failed or was
-      // interrupted were not judged (summary.cpp), and none of them passed.
-      v["checks_pass"] =
-          s.contains("checks") ? Json(status == "ok" && missed.empty()) : Json(nullptr);
+      // The run's own verdict (Summary::checks_pass: false for a run that
+      // failed or was interrupted, whose checks were not judged); none
+      // without declared tolerances.
+      v["checks_pass"] = s.value("checks_pass", Json(nullptr));
       if (status != "ok") {
         verdict = "failed";
         sentence = "stopped: " + html_escape(status);
