@@ -17,14 +17,20 @@ Eigen::Vector2d node_position(const Vec& q, int node) {
   return q.segment<2>(2 * node);
 }
 
-// How far p lies behind the chain `edges` (body on each edge's left), or 0
-// (in front, or nearest to an open end of the chain). Brute force over the
-// edges; `box` is the chain's bounding box at q grown by four of its mean
-// edge lengths (p outside it: 0). A node that sinks deeper has passed that
-// band, continuously, and the recorder's maximum has it from there.
-double depth_behind(const std::vector<std::array<int, 2>>& edges, const Vec& q,
+// How far p lies behind the chain `edges` (body on each edge's left): the
+// distance and the length of the edge it lies behind (at a vertex, the mean
+// of its two edges); zero in front, or nearest to an open end of the chain.
+// Brute force over the edges; `box` is the chain's bounding box at q grown
+// by four of its mean edge lengths (p outside it: zero). A node that sinks
+// deeper has passed that band, continuously, and the recorder's maximum has
+// it from there.
+struct Behind {
+  double depth = 0.0, edge = 0.0;
+};
+
+Behind depth_behind(const std::vector<std::array<int, 2>>& edges, const Vec& q,
                     const Eigen::Vector2d& p, const Eigen::AlignedBox2d& box) {
-  if (!box.contains(p)) return 0.0;
+  if (!box.contains(p)) return {};
   double best = std::numeric_limits<double>::infinity();
   std::size_t best_edge = 0;
   double best_t = 0.0;
@@ -35,23 +41,40 @@ double depth_behind(const std::vector<std::array<int, 2>>& edges, const Vec& q,
     const double dist = (a + t * d - p).squaredNorm();
     if (dist < best) best = dist, best_edge = e, best_t = t;
   }
+  const auto along = [&](std::size_t e) {
+    return Eigen::Vector2d(node_position(q, edges[e][1]) - node_position(q, edges[e][0]));
+  };
   const auto outward = [&](std::size_t e) {
-    const Eigen::Vector2d d = node_position(q, edges[e][1]) - node_position(q, edges[e][0]);
+    const Eigen::Vector2d d = along(e);
     return Eigen::Vector2d(d.y(), -d.x()).normalized();
   };
   const std::array<int, 2>& edge = edges[best_edge];
   if (best_t > 0.0 && best_t < 1.0) {
     const Eigen::Vector2d a = node_position(q, edge[0]);
-    return (p - a).dot(outward(best_edge)) < 0.0 ? std::sqrt(best) : 0.0;
+    if ((p - a).dot(outward(best_edge)) >= 0.0) return {};
+    return {std::sqrt(best), along(best_edge).norm()};
   }
   // The nearest point is a vertex: its two edges' outward normals summed.
   const int vertex = best_t <= 0.0 ? edge[0] : edge[1];
   Eigen::Vector2d normal = Eigen::Vector2d::Zero();
+  double length = 0.0;
   int sharing = 0;
   for (std::size_t e = 0; e < edges.size(); ++e)
-    if (edges[e][0] == vertex || edges[e][1] == vertex) normal += outward(e), ++sharing;
-  if (sharing < 2) return 0.0;  // an open end: not decided
-  return (p - node_position(q, vertex)).dot(normal) < 0.0 ? std::sqrt(best) : 0.0;
+    if (edges[e][0] == vertex || edges[e][1] == vertex)
+      normal += outward(e), length += along(e).norm(), ++sharing;
+  if (sharing < 2) return {};  // an open end: not decided
+  if ((p - node_position(q, vertex)).dot(normal) >= 0.0) return {};
+  return {std::sqrt(best), length / sharing};
+}
+
+// The longest edge of `edges` at each of its nodes, at q.
+std::map<int, double> longest_edge_at(const std::vector<std::array<int, 2>>& edges, const Vec& q) {
+  std::map<int, double> out;
+  for (const auto& e : edges) {
+    const double length = (node_position(q, e[1]) - node_position(q, e[0])).norm();
+    for (int node : e) out[node] = std::max(out[node], length);
+  }
+  return out;
 }
 
 Eigen::AlignedBox2d chain_box(const std::vector<std::array<int, 2>>& edges, const Vec& q) {
@@ -121,15 +144,27 @@ MortarContact::MortarContact(const System& system, ContactSurface slave, Contact
         master_nodes_.push_back(node);
 }
 
-double MortarContact::surface_depth(const Vec& q) const {
-  double depth = 0.0;
-  const Eigen::AlignedBox2d master_box = chain_box(master_.edges, q);
-  for (int node : slave_nodes_)
-    depth = std::max(depth, depth_behind(master_.edges, q, node_position(q, node), master_box));
-  const Eigen::AlignedBox2d slave_box = chain_box(slave_.edges, q);
-  for (int node : master_nodes_)
-    depth = std::max(depth, depth_behind(slave_.edges, q, node_position(q, node), slave_box));
-  return depth;
+SurfaceDepth MortarContact::surface_depth(const Vec& q) const {
+  // A node's depth as a fraction of the coarser of the two meshes there: the
+  // edge it lies behind, or its own longest edge (a corner of a coarse mesh
+  // cuts into a fine face by a fraction of its own edges, not the face's).
+  SurfaceDepth deepest;
+  const auto measure = [&](const std::vector<int>& nodes, const ContactSurface& own,
+                           const ContactSurface& other) {
+    const Eigen::AlignedBox2d box = chain_box(other.edges, q);
+    std::map<int, double> own_edge;
+    for (int node : nodes) {
+      const Behind b = depth_behind(other.edges, q, node_position(q, node), box);
+      if (!(b.depth > 0.0)) continue;
+      if (own_edge.empty()) own_edge = longest_edge_at(own.edges, q);
+      const double h = std::max(b.edge, own_edge[node]);
+      deepest.depth = std::max(deepest.depth, b.depth);
+      deepest.relative = std::max(deepest.relative, h > 0.0 ? b.depth / h : 0.0);
+    }
+  };
+  measure(slave_nodes_, slave_, master_);
+  measure(master_nodes_, master_, slave_);
+  return deepest;
 }
 
 std::string MortarContact::describe(int i) const {

@@ -62,7 +62,7 @@ class MortarContact final : public UnilateralConstraints {
   /// their left) or behind the closest vertex's pseudo-normal (the sum of
   /// its two edges' outward normals); at a chain's open end it is not
   /// decided (counted as outside). Returns the largest such distance.
-  double surface_depth(const Vec& q) const override;
+  SurfaceDepth surface_depth(const Vec& q) const override;
   std::string describe(int i) const override;
   /// epsilon w_A when the contact is penalized, else 0.
   double penalty(int i) const override;

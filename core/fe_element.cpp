@@ -89,6 +89,10 @@ Q1Element::Q1Element(std::vector<int> dofs, const QuadNodes& x, const Material& 
                                 std::to_string(n_local()));
   }
   check_geometry(x, describe());
+  for (std::size_t a = 0; a < 4; ++a) {
+    const Eigen::Vector2d e1 = x[(a + 1) % 4] - x[a], e2 = x[(a + 3) % 4] - x[a];
+    corner_area_[a] = e1.x() * e2.y() - e1.y() * e2.x();
+  }
   for (int g = 0; g < kGaussPoints; ++g) {
     const ParentPoint p = gauss_point(g);
     const Eigen::Matrix2d j = reference_jacobian(x, p.xi, p.eta);
@@ -115,6 +119,18 @@ std::string Q1Element::describe() const {
     s << ")";
   }
   return s.str();
+}
+
+double Q1Element::corner_det_f_min(const Vec& q) const {
+  double least = std::numeric_limits<double>::infinity();
+  for (int a = 0; a < 4; ++a) {
+    const Eigen::Vector2d p = q.segment<2>(2 * a);
+    const Eigen::Vector2d e1 = q.segment<2>(2 * ((a + 1) % 4)) - p;
+    const Eigen::Vector2d e2 = q.segment<2>(2 * ((a + 3) % 4)) - p;
+    least = std::min(
+        least, (e1.x() * e2.y() - e1.y() * e2.x()) / corner_area_[static_cast<std::size_t>(a)]);
+  }
+  return least;
 }
 
 Eigen::Matrix2d Q1Element::deformation_gradient(const Vec& q, int gp) const {

@@ -78,6 +78,13 @@ class Q1Element final : public Term {
   const Material& material() const { return material_; }
   /// Reference area, sum of w J0 over the Gauss points.
   double area() const;
+  /// The smallest det F at the element's four corners for the local
+  /// positions q: the current corner's area form over the reference one's.
+  /// det J of a bilinear map is linear in each parent coordinate, so the
+  /// element is inverted somewhere (folded, hourglassed) exactly when this is
+  /// <= 0, even where all four Gauss points, which the energy sees, keep
+  /// det F > 0.
+  double corner_det_f_min(const Vec& q) const;
   /// F at Gauss point gp for the local positions q.
   Eigen::Matrix2d deformation_gradient(const Vec& q, int gp) const;
   /// Second Piola-Kirchhoff stress S = 2 DW(C) at Gauss point gp (linear
@@ -111,6 +118,7 @@ class Q1Element final : public Term {
   void kernel(GradientKind kind, const Vec8& q0, const Vec8& q1, Vec8& grad, Mat8* jac) const;
 
   std::array<GaussPoint, kGaussPoints> gp_;
+  std::array<double, 4> corner_area_;  // (x_a+1 - x_a) x (x_a-1 - x_a), reference
   Material material_;
   int index_;
   std::shared_ptr<const std::string> body_;

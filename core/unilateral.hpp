@@ -20,6 +20,13 @@
 
 namespace emdae {
 
+/// How deep surface nodes lie behind the other surface of a contact pair
+/// (UnilateralConstraints::surface_depth).
+struct SurfaceDepth {
+  double depth = 0.0;     // a distance
+  double relative = 0.0;  // a fraction of the local edge length (the coarser side's)
+};
+
 class UnilateralConstraints {
  public:
   virtual ~UnilateralConstraints() = default;
@@ -42,9 +49,12 @@ class UnilateralConstraints {
   /// the check that bodies do not overlap at the start.
   virtual double overlap_gap(int i, const Vec& q) const { return gap(i, q); }
   /// The deepest a surface node of either side lies behind the other side's
-  /// surface at q, as a distance (geometric, not weighted); 0 when none is
-  /// or when the set has no surfaces.
-  virtual double surface_depth(const Vec& /*q*/) const { return 0.0; }
+  /// surface at q (geometric, not weighted): as a distance, and as a
+  /// fraction of the coarser mesh there (the longer of the surface edge it
+  /// lies behind, at a vertex the mean of its two edges, and the node's own
+  /// longest surface edge); both maxima over the nodes, zero when none is or
+  /// when the set has no surfaces.
+  virtual SurfaceDepth surface_depth(const Vec& /*q*/) const { return {}; }
   /// Describes candidate i for messages ("slave node 17 of ring_a").
   virtual std::string describe(int i) const = 0;
   /// Penalty stiffness k_i of candidate i, or 0 (the default) for an exact

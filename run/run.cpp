@@ -373,7 +373,7 @@ RunResult::End integrate_model(const std::function<std::unique_ptr<Stepper>()>& 
 // 4: with the linear solver's counters; 5: with its pivot-fill switches;
 // 6: with the scene's content and a checksum of the whole file; 7: with the
 // recorder's weighted overlap; 8: with its surface depth.
-constexpr const char* kCheckpointMagic = "emdae checkpoint 8";
+constexpr const char* kCheckpointMagic = "emdae checkpoint 9";
 
 // What a checkpoint holds besides the recorder: the loop, the state, where
 // the history and the fields are.

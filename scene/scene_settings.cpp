@@ -285,7 +285,7 @@ void Builder::parse_output(const Fields& f) {
 void Builder::parse_tolerances(const Fields& f) {
   f.only({"energy_rel", "energy_balance_rel", "linear_momentum", "angular_momentum_rel",
           "angular_momentum_balance_rel", "constraint", "gap_violation", "penetration",
-          "contact_pressure_spread"});
+          "contact_pressure_spread", "surface_depth", "det_f_min"});
   // A static analysis has no time history whose energy or momenta could drift.
   if (settings().static_only)
     for (const char* k : {"energy_rel", "energy_balance_rel", "linear_momentum",
@@ -306,6 +306,16 @@ void Builder::parse_tolerances(const Fields& f) {
   t.gap_violation = f.optional_positive("gap_violation");
   t.penetration = f.optional_positive("penetration");
   t.contact_pressure_spread = f.optional_positive("contact_pressure_spread");
+  t.surface_depth = f.optional_positive("surface_depth");
+  if (t.surface_depth && model().contacts().empty())
+    f.fail_key("surface_depth",
+               "the scene has no [[contacts]] whose surfaces could be checked, received " +
+                   show(*f.find("surface_depth")));
+  t.det_f_min = f.optional_number("det_f_min");
+  if (t.det_f_min && !(*t.det_f_min >= 0.0 && *t.det_f_min < 1.0))
+    f.fail_key("det_f_min",
+               "must be in [0, 1): det F at an element corner must stay above it, received " +
+                   show(*f.find("det_f_min")));
   if (t.contact_pressure_spread && model().contacts().empty())
     f.fail_key("contact_pressure_spread",
                "the scene has no [[contacts]] whose pressure could be checked, received " +

@@ -52,12 +52,14 @@ inline std::string figures_line(const Summary& s) {
   const ContactFigures c = s.contact.value_or(ContactFigures{});
   std::snprintf(line, sizeof line,
                 "energy %.2e | L %.2e J %.2e | L bal %.2e J bal %.2e | gap %.2e pen %.2e | "
-                "active max %d events %ld | steps %ld newton %ld cutbacks %ld | cpu %.2f s",
+                "depth %.3f detF %.3f | active max %d events %ld | steps %ld newton %ld "
+                "cutbacks %ld | cpu %.2f s",
                 s.energy_rel_error_max, s.linear_momentum_error_max.value_or(-1),
                 s.angular_momentum_rel_error_max.value_or(-1),
                 s.linear_momentum_balance_error_max.value_or(-1),
                 s.angular_momentum_balance_rel_error_max.value_or(-1), c.gap_violation_max,
-                c.penetration_max, c.active_contacts_max, c.contact_events, s.steps,
+                c.penetration_max, c.surface_depth_relative_max - c.surface_depth_relative_start,
+                s.det_f_min.value_or(1.0), c.active_contacts_max, c.contact_events, s.steps,
                 s.newton_iterations, s.cutbacks, s.cpu_seconds);
   return line;
 }
@@ -110,6 +112,18 @@ inline ImpactVerdict judge_impact(const Summary& s, double newton_tolerance, con
     if (s.contact->active_contacts_max < 1) v.violations.push_back("the bodies never touched");
     bound("gap_violation_max", s.contact->gap_violation_max, newton_tolerance);
     bound("penetration_max", s.contact->penetration_max, newton_tolerance);
+    // Geometric: the mortar gap can hold while a body goes through the
+    // other (examples/known_wrong/gap_cross.toml); the run's own default.
+    bound("surface depth beyond the start, of an edge",
+          s.contact->surface_depth_relative_max - s.contact->surface_depth_relative_start,
+          kSurfaceDepthDefault);
+  }
+  // An element folded over at a corner (its Gauss points upright).
+  if (s.det_f_min && !(*s.det_f_min > 0.0)) {
+    char buf[160];
+    std::snprintf(buf, sizeof buf, "det_f_min %.3e <= 0 at t = %.4g", *s.det_f_min,
+                  s.det_f_min_time);
+    v.violations.push_back(buf);
   }
   return v;
 }

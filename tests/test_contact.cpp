@@ -597,7 +597,9 @@ void print(const char* what, const Summary& f) {
 // segment's left too). Behind an edge's interior the depth is the distance
 // to the edge; in front, 0; nearest an open end of a chain (the square's top
 // face alone as master, or the slave segment's ends), not decided: 0. The
-// master nodes are measured against the slave chain as well.
+// master nodes are measured against the slave chain as well. The relative
+// depth divides by the coarser mesh at the node: the edge it lies behind or
+// its own longest edge.
 TEST(MortarContact, SurfaceDepthIsTheDeepestNodeBehindTheOtherSurface) {
   System s(2);
   for (const auto& [x, y] : {std::pair{0.0, 0.0}, {1.0, 0.0}, {1.0, 1.0}, {0.0, 1.0}})
@@ -614,14 +616,19 @@ TEST(MortarContact, SurfaceDepthIsTheDeepestNodeBehindTheOtherSurface) {
     q.segment<2>(8) = Eigen::Vector2d(x, y);
     return std::pair{closed.surface_depth(q), open.surface_depth(q)};
   };
-  EXPECT_EQ(at(0.5, 1.5).first, 0.0);              // in front of the top
-  EXPECT_NEAR(at(0.5, 0.9).first, 0.1, 1e-15);     // behind the top's interior
-  EXPECT_NEAR(at(0.5, 0.9).second, 0.1, 1e-15);    // the top alone: the same
-  EXPECT_NEAR(at(0.95, 0.97).first, 0.03, 1e-15);  // nearest the top, near a corner
-  EXPECT_EQ(at(1.1, 1.1).first, 0.0);              // outside, nearest the corner (1, 1)
-  EXPECT_EQ(at(1.1, 0.9).second, 0.0);             // beside the top's open end
+  EXPECT_EQ(at(0.5, 1.5).first.depth, 0.0);           // in front of the top
+  EXPECT_NEAR(at(0.5, 0.9).first.depth, 0.1, 1e-15);  // behind the top's interior
+  // As a fraction of the coarser mesh there: the slave's own edge (2.57)
+  // is longer than the top (1).
+  EXPECT_NEAR(at(0.5, 0.9).first.relative,
+              0.1 / (Eigen::Vector2d(3.0, 1.5) - Eigen::Vector2d(0.5, 0.9)).norm(), 1e-15);
+  EXPECT_NEAR(at(0.5, 0.9).second.depth, 0.1, 1e-15);    // the top alone: the same
+  EXPECT_NEAR(at(0.95, 0.97).first.depth, 0.03, 1e-15);  // nearest the top, near a corner
+  EXPECT_EQ(at(1.1, 1.1).first.depth, 0.0);              // outside, nearest the corner (1, 1)
+  EXPECT_EQ(at(1.1, 0.9).second.depth, 0.0);             // beside the top's open end
   // A master corner behind the slave segment: 4 above the top, 5 low on
-  // the right, the segment passing below the corner (1, 1).
+  // the right, the segment passing below the corner (1, 1); the fraction is
+  // of the slave segment's length.
   q.segment<2>(8) = Eigen::Vector2d(0.5, 1.05);
   q.segment<2>(10) = Eigen::Vector2d(3.0, 0.5);
   const Eigen::Vector2d a(0.5, 1.05), d = Eigen::Vector2d(3.0, 0.5) - a, corner(1.0, 1.0);
@@ -630,7 +637,19 @@ TEST(MortarContact, SurfaceDepthIsTheDeepestNodeBehindTheOtherSurface) {
   ASSERT_LT(t, 1.0);
   const double behind = (a + t * d - corner).norm();
   EXPECT_GT(behind, 0.05);
-  EXPECT_NEAR(closed.surface_depth(q), behind, 1e-15);
+  EXPECT_NEAR(closed.surface_depth(q).depth, behind, 1e-15);
+  EXPECT_NEAR(closed.surface_depth(q).relative, behind / d.norm(), 1e-15);
+  // The square stretched to 2 wide, the slave segment shorter: behind the
+  // top (2) the fraction is of the top, longer than the segment (1.43) ...
+  q.segment<2>(2) = Eigen::Vector2d(2.0, 0.0);
+  q.segment<2>(4) = Eigen::Vector2d(2.0, 1.0);
+  q.segment<2>(10) = Eigen::Vector2d(3.0, 1.5);
+  q.segment<2>(8) = Eigen::Vector2d(1.7, 0.9);
+  EXPECT_NEAR(closed.surface_depth(q).relative, 0.1 / 2.0, 1e-15);
+  // ... behind the right side (1) it is of the segment (1.19), longer.
+  q.segment<2>(8) = Eigen::Vector2d(1.95, 0.95);
+  EXPECT_NEAR(closed.surface_depth(q).relative,
+              0.05 / (Eigen::Vector2d(3.0, 1.5) - Eigen::Vector2d(1.95, 0.95)).norm(), 1e-15);
 }
 
 TEST(RingImpact, EnergyMomentumConservesThroughImpact) {

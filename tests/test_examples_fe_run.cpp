@@ -417,5 +417,43 @@ TEST(SceneFeRun, StaticFailuresExitThreeAndFour) {
   EXPECT_EQ(s["status"], "ok");
 }
 
+// The geometric checks judged on every run (verify/summary.cpp): the corner
+// impact's square keeps det F >= 0.58 at its corners and its corner goes
+// 0.12 of an edge behind the other surface. Their defaults pass it; a
+// scene's own limits above those figures fail it with exit 4, and
+// summary.json says which, det_f_min as a lower bound.
+TEST(SceneFeRun, GeometricChecksAreJudgedOnEveryRunWithTheirDefaultsOrTheScenesLimits) {
+  TempDir dir;
+  const std::string scene = quote(example("hard/corner_impact"));
+  Result r =
+      emdae("run " + scene + " -q --set output.vtu_every=0 --out " + quote(dir / "a"), dir.path());
+  ASSERT_EQ(r.code, 0) << r.output;
+  nlohmann::json s = read_json(dir / "a/summary.json");
+  const double det_f = s["det_f_min"].get<double>();
+  const double depth = s["surface_depth_relative_max"].get<double>();
+  EXPECT_GT(det_f, 0.3);
+  EXPECT_LT(det_f, 0.9);
+  EXPECT_GT(depth, 0.05);
+  EXPECT_LT(depth, 0.5);
+  EXPECT_EQ(s["checks"]["det_f_min"]["result"], "pass");
+  EXPECT_EQ(s["checks"]["det_f_min"]["bound"], "lower");
+  EXPECT_EQ(s["checks"]["det_f_min"]["limit"], 0.0);
+  EXPECT_EQ(s["checks"]["surface_depth"]["result"], "pass");
+  EXPECT_EQ(s["checks"]["surface_depth"]["limit"], 0.5);
+  EXPECT_EQ(s["checks"]["surface_depth"]["value"].get<double>(),
+            depth - s["surface_depth_relative_start"].get<double>());
+  r = emdae("run " + scene + " -q --set output.vtu_every=0 --set tolerances.det_f_min=" +
+                std::to_string(det_f + 0.01) + " --set tolerances.surface_depth=" +
+                std::to_string(depth / 2) + " --out " + quote(dir / "b"),
+            dir.path());
+  EXPECT_EQ(r.code, 4) << r.output;
+  EXPECT_NE(r.output.find("check det_f_min failed"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("check surface_depth failed"), std::string::npos) << r.output;
+  s = read_json(dir / "b/summary.json");
+  EXPECT_EQ(s["checks"]["det_f_min"]["result"], "fail");
+  EXPECT_EQ(s["checks"]["surface_depth"]["result"], "fail");
+  EXPECT_EQ(s["checks_pass"], false);
+}
+
 }  // namespace
 }  // namespace emdae

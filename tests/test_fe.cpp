@@ -244,6 +244,27 @@ TEST(Element, InvertedOrDegenerateReferenceElementIsRejected) {
 // Boundary edge sets: the outward normal (dy, -dx) of every edge points away
 // from the body (ring: radially, sign by set; rectangle: the side's normal),
 // and the sets cover the boundary (lengths add up to the perimeters).
+// Q1Element::corner_det_f_min: det F at the corners. A homogeneous F gives
+// det F everywhere; a unit square whose corner (1, 1) is pushed to (0.45,
+// 0.45) has folded at that corner (det J there -0.1 of the reference's)
+// while all four Gauss points, which the energy sees, keep det F > 0.
+TEST(Element, CornerDetFSeesAFoldTheGaussPointsMiss) {
+  const QuadNodes x = {Eigen::Vector2d(0.0, 0.0), Eigen::Vector2d(1.0, 0.0),
+                       Eigen::Vector2d(1.0, 1.0), Eigen::Vector2d(0.0, 1.0)};
+  const Material mat = make_material(MaterialModel::NeoHooke, 100.0, 0.3, 1.0);
+  const Q1Element e({0, 1, 2, 3, 4, 5, 6, 7}, x, mat);
+  Eigen::Matrix2d f;
+  f << 0.7, 0.3, -0.2, 0.5;  // det 0.41
+  Vec q(8);
+  for (int a = 0; a < 4; ++a) q.segment<2>(2 * a) = f * x[static_cast<std::size_t>(a)];
+  EXPECT_NEAR(e.corner_det_f_min(q), 0.41, 1e-14);
+  for (int a = 0; a < 4; ++a) q.segment<2>(2 * a) = x[static_cast<std::size_t>(a)];
+  q.segment<2>(4) = Eigen::Vector2d(0.45, 0.45);
+  EXPECT_NEAR(e.corner_det_f_min(q), -0.1, 1e-14);
+  for (int gp = 0; gp < Q1Element::kGaussPoints; ++gp)
+    EXPECT_GT(e.deformation_gradient(q, gp).determinant(), 0.1) << "Gauss point " << gp;
+}
+
 TEST(Mesh, BoundarySetsAreOrientedWithOutwardNormals) {
   const Eigen::Vector2d c(1.0, -2.0);
   const Mesh ring = ring_mesh(c, 9.0, 10.0, 32, 2);

@@ -4,7 +4,9 @@
 // tolerances 1e-10 and 1e-11, each its own ctest entry. Every run is judged
 // by its summary (tests/impact_checks.hpp): energy error <= 1e-9 relative,
 // momenta (or, with supports, their balance with the supports' impulses)
-// <= 1e-12, active gaps and penetration within the Newton tolerance, and the
+// <= 1e-12, active gaps and penetration within the Newton tolerance, no
+// surface node more than half an edge behind the other surface and no element
+// corner turned inside out (the geometric checks every run makes), and the
 // contact events reported consistent with the active sets of the accepted
 // states.
 //
@@ -59,6 +61,10 @@ struct HardScene {
   bool quick = false;
   // Too costly for the default suite at any step (Study/ only).
   bool study_only = false;
+  // Known wrong: an element folds over at a corner (det F <= 0) at every
+  // step and tolerance of the grid, and bodies overlap where it does. The
+  // run must fail the geometric checks, and pass every other bound.
+  bool folds = false;
 };
 
 // The catalogue, every scene of examples/hard/.
@@ -76,7 +82,7 @@ const std::vector<HardScene>& hard_scenes() {
       {"ring_impact_stiff", 0.0, false, false},
       {"ring_impact_large_step", 0.0, false, false},
       {"ring_impact_neo_hooke", 0.0, false, false},
-      {"blocks_squash_neo_hooke", 0.0, false, false},
+      {"blocks_squash_neo_hooke", 0.0, false, false, true},
       {"slide_off_edge", 0.0, false, false},
       {"ring_impact_refined_5k", 0.0, false, true},
       {"ring_impact_refined_20k", 0.0, false, true},
@@ -89,6 +95,7 @@ struct HardCase {
   double dt_factor = 1.0;
   double tolerance = 1e-10;
   double t_end = 0.0;  // 0: the scene's
+  bool folds = false;  // HardScene::folds
 };
 
 // Cases that miss a bound of the issue, with why (docs/hard-cases.md): not
@@ -121,7 +128,7 @@ std::vector<HardCase> catalogue(Group group) {
           g = Group::KnownFailing;
         else if (factor == 1.0 && tol == 1e-10 && !s.study_only)
           g = s.quick ? Group::Quick : Group::Default;
-        if (g == group) out.push_back({s.name, factor, tol, s.t_end});
+        if (g == group) out.push_back({s.name, factor, tol, s.t_end, s.folds});
       }
   return out;
 }
@@ -207,8 +214,18 @@ TEST_P(HardCatalogue, EnergyMomentumThroughEveryImpact) {
   const CaseRun r = run_case(*scene, c, watch);
   const Summary& s = r.result.summary;
   ASSERT_TRUE(r.result.finished()) << r.what << ": " << s.status;
-  for (const auto& violation : r.verdict.violations)
+  const auto geometric = [](const std::string& violation) {
+    return violation.rfind("det_f_min", 0) == 0 || violation.rfind("surface depth", 0) == 0;
+  };
+  for (const auto& violation : r.verdict.violations) {
+    if (c.folds && geometric(violation)) continue;
     ADD_FAILURE() << r.what << ": " << violation << "; " << watch.first_energy_jump();
+  }
+  if (c.folds) {  // known wrong: when it no longer folds, it is a catalogue scene again
+    EXPECT_TRUE(s.det_f_min && *s.det_f_min <= 0.0)
+        << r.what << ": no element folded (det_f_min " << s.det_f_min.value_or(1.0) << ")";
+    EXPECT_FALSE(s.checks_pass()) << r.what;
+  }
   // Which momentum figures a scene must have: both conserved without
   // supports and gravity; with supports (and no gravity) both balances.
   const bool supports = !scene->model->dirichlet().empty();
@@ -294,16 +311,28 @@ INSTANTIATE_TEST_SUITE_P(Default, HardSlideOff, ::testing::ValuesIn(slide_off_ca
 
 // examples/known_wrong/gap_cross.toml: a slider crossing onto a second block
 // sinks through it while the mortar figures stay at round-off (the scene
-// file says why). The geometric surface depth must show it: deeper than a
-// slider element (0.4 / 7). When the contact holds there, the depth falls
-// and this case belongs in the catalogue instead.
-TEST(HardKnownWrong, TheSurfaceDepthShowsTheSliderSinkingThroughTheSecondBlock) {
+// file says why). The geometric surface depth shows it, and the run's
+// default check `surface_depth` fails it: deeper than a slider element
+// (0.4 / 7) and beyond half the edge it lies behind. When the contact holds
+// there, the depth falls and this case belongs in the catalogue instead.
+TEST(HardKnownWrong, TheSurfaceDepthCheckFailsTheSliderSinkingThroughTheSecondBlock) {
   const auto scene = load_scene(example("known_wrong/gap_cross"), {"output.vtu_every=0"});
   const RunResult r = run(*scene->model, scene->settings);
   ASSERT_TRUE(r.finished()) << r.summary.status;
   ASSERT_TRUE(r.summary.contact);
   EXPECT_GT(r.summary.contact->surface_depth_max, 0.4 / 7);
+  EXPECT_GT(r.summary.contact->surface_depth_relative_max, kSurfaceDepthDefault);
+  EXPECT_EQ(r.summary.contact->surface_depth_relative_start, 0.0);
   EXPECT_LE(r.summary.contact->penetration_max, 1e-10);
+  const auto check = std::find_if(r.summary.checks.begin(), r.summary.checks.end(),
+                                  [](const Check& c) { return c.name == "surface_depth"; });
+  ASSERT_NE(check, r.summary.checks.end());
+  EXPECT_EQ(check->result, "fail");
+  EXPECT_FALSE(r.summary.checks_pass());
+  for (const Check& c : r.summary.checks) {  // the rest of the scene's tolerances hold
+    if (c.name == "surface_depth") continue;
+    EXPECT_EQ(c.result, "pass") << c.name;
+  }
 }
 
 // The resting block: the scene as written (static solve, then 10^4 steps

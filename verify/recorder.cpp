@@ -5,6 +5,7 @@
 #include <istream>
 #include <ostream>
 #include <sstream>
+#include <stdexcept>
 #include <utility>
 #include <vector>
 
@@ -118,6 +119,10 @@ Recorder::Recorder(const System& system, const State& initial, ExternalWork exte
   initial_.quantities = measure(system, initial.q, initial.v, initial.t);
   initial_.external_work = external_work_ ? external_work_(initial) : 0.0;
   measure_contact(initial, initial_);
+  surface_depth_relative_start_ = surface_depth_relative_max_;
+  for (const auto& term : system.potentials())
+    if (const auto* e = dynamic_cast<const Q1Element*>(term.get())) elements_.push_back(e);
+  measure_elements(initial);
   const Quantities& q0 = initial_.quantities;
   energy_scale_ = std::max(std::abs(q0.total()), q0.kinetic + std::abs(q0.potential));
   const double j0 = q0.angular_momentum.norm();
@@ -146,6 +151,7 @@ const Sample& Recorder::observe(const State& state, const AcceptedStep& step) {
   s.constraint_work = last_.constraint_work + step.stats.constraint_work;
   s.contact_events = step.stats.contact_events;
   measure_contact(state, s);
+  measure_elements(state);
   newton_iterations_ += s.newton_iterations;
   newton_max_per_step_ = std::max(newton_max_per_step_, s.newton_iterations);
   cutbacks_ += s.cutbacks;
@@ -182,8 +188,11 @@ void Recorder::measure_contact(const State& state, Sample& s) {
     const double overlap = system_.unilateral_overlap_gap(id, state.q);
     if (std::isnan(overlap) || overlap < 0) keep_max(overlap_max_, -overlap);
   }
-  for (const auto& set : system_.unilateral())
-    keep_max(surface_depth_max_, set->surface_depth(state.q));
+  for (const auto& set : system_.unilateral()) {
+    const SurfaceDepth d = set->surface_depth(state.q);
+    keep_max(surface_depth_max_, d.depth);
+    keep_max(surface_depth_relative_max_, d.relative);
+  }
   if (s.active_contacts > 0) {
     if (std::isnan(contact_first_)) contact_first_ = s.t;
     contact_last_ = s.t;
@@ -191,6 +200,25 @@ void Recorder::measure_contact(const State& state, Sample& s) {
   active_max_ = std::max(active_max_, s.active_contacts);
   keep_max(gap_violation_max_, s.gap_violation);
   keep_max(penetration_max_, s.penetration);
+}
+
+void Recorder::measure_elements(const State& state) {
+  Vec local(8);
+  for (std::size_t k = 0; k < elements_.size(); ++k) {
+    const auto& dofs = elements_[k]->dofs();
+    for (std::size_t i = 0; i < 8; ++i) local[static_cast<Eigen::Index>(i)] = state.q[dofs[i]];
+    const double d = elements_[k]->corner_det_f_min(local);
+    if (d < det_f_min_ || std::isnan(d)) {
+      det_f_min_ = d;
+      det_f_min_t_ = state.t;
+      det_f_min_element_ = static_cast<int>(k);
+    }
+  }
+}
+
+std::string Recorder::det_f_min_element() const {
+  if (det_f_min_element_ < 0) return "";
+  return elements_[static_cast<std::size_t>(det_f_min_element_)]->describe();
 }
 
 void Recorder::track_load_free(const Sample& previous, const Sample& s) {
@@ -392,12 +420,32 @@ void Recorder::save(std::ostream& out) const {
   using namespace binary;
   put_sample(out, initial_);
   put_sample(out, last_);
-  for (double x : {energy_scale_,      balance_scale_,      angular_scale_,       energy_error_max_,
-                   balance_error_max_, free_ref_,           free_ref_scale_,      free_time_,
-                   free_error_max_,    linear_balance_max_, angular_balance_max_, angular_size_max_,
-                   angular_reach_max_, gap_violation_max_,  penetration_max_,     contact_first_,
-                   contact_last_,      linear_error_max_,   angular_error_max_,   constraint_max_,
-                   overlap_max_,       surface_depth_max_})
+  for (double x : {energy_scale_,
+                   balance_scale_,
+                   angular_scale_,
+                   energy_error_max_,
+                   balance_error_max_,
+                   free_ref_,
+                   free_ref_scale_,
+                   free_time_,
+                   free_error_max_,
+                   linear_balance_max_,
+                   angular_balance_max_,
+                   angular_size_max_,
+                   angular_reach_max_,
+                   gap_violation_max_,
+                   penetration_max_,
+                   contact_first_,
+                   contact_last_,
+                   linear_error_max_,
+                   angular_error_max_,
+                   constraint_max_,
+                   overlap_max_,
+                   surface_depth_max_,
+                   surface_depth_relative_max_,
+                   surface_depth_relative_start_,
+                   det_f_min_,
+                   det_f_min_t_})
     put(out, x);
   put(out, in_free_);
   put(out, free_intervals_);
@@ -410,6 +458,7 @@ void Recorder::save(std::ostream& out) const {
   put(out, newton_iterations_);
   put(out, newton_max_per_step_);
   put(out, cutbacks_);
+  put(out, det_f_min_element_);
 }
 
 void Recorder::restore(std::istream& in) {
@@ -420,13 +469,32 @@ void Recorder::restore(std::istream& in) {
     throw std::runtime_error("the checkpoint's recorder is of another system");
   initial_ = std::move(initial);
   last_ = std::move(last);
-  for (double* x :
-       {&energy_scale_,      &balance_scale_,      &angular_scale_,       &energy_error_max_,
-        &balance_error_max_, &free_ref_,           &free_ref_scale_,      &free_time_,
-        &free_error_max_,    &linear_balance_max_, &angular_balance_max_, &angular_size_max_,
-        &angular_reach_max_, &gap_violation_max_,  &penetration_max_,     &contact_first_,
-        &contact_last_,      &linear_error_max_,   &angular_error_max_,   &constraint_max_,
-        &overlap_max_,       &surface_depth_max_})
+  for (double* x : {&energy_scale_,
+                    &balance_scale_,
+                    &angular_scale_,
+                    &energy_error_max_,
+                    &balance_error_max_,
+                    &free_ref_,
+                    &free_ref_scale_,
+                    &free_time_,
+                    &free_error_max_,
+                    &linear_balance_max_,
+                    &angular_balance_max_,
+                    &angular_size_max_,
+                    &angular_reach_max_,
+                    &gap_violation_max_,
+                    &penetration_max_,
+                    &contact_first_,
+                    &contact_last_,
+                    &linear_error_max_,
+                    &angular_error_max_,
+                    &constraint_max_,
+                    &overlap_max_,
+                    &surface_depth_max_,
+                    &surface_depth_relative_max_,
+                    &surface_depth_relative_start_,
+                    &det_f_min_,
+                    &det_f_min_t_})
     *x = get<double>(in);
   in_free_ = get<bool>(in);
   free_intervals_ = get<int>(in);
@@ -439,6 +507,9 @@ void Recorder::restore(std::istream& in) {
   newton_iterations_ = get<long>(in);
   newton_max_per_step_ = get<int>(in);
   cutbacks_ = get<long>(in);
+  det_f_min_element_ = get<int>(in);
+  if (det_f_min_element_ >= static_cast<int>(elements_.size()))
+    throw std::runtime_error("the checkpoint's recorder is of another system");
 }
 
 }  // namespace emdae

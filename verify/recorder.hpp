@@ -57,6 +57,7 @@
 #include <optional>
 #include <string>
 
+#include "core/fe_element.hpp"
 #include "core/quantities.hpp"
 #include "integrators/driver.hpp"
 
@@ -173,7 +174,20 @@ class Recorder {
   /// The deepest a contact surface node lay behind the other surface
   /// (UnilateralConstraints::surface_depth): geometric, not weighted.
   double surface_depth_max() const { return surface_depth_max_; }
+  /// The same depth as a fraction of the length of the surface edge the node
+  /// lay behind (at a vertex: the mean of its two edges), the maximum over
+  /// the run and at the start (bodies that start overlapping: a press fit).
+  double surface_depth_relative_max() const { return surface_depth_relative_max_; }
+  double surface_depth_relative_start() const { return surface_depth_relative_start_; }
   long contact_events() const { return contact_events_; }
+
+  /// Q1 bodies: the smallest det F at an element corner over the run
+  /// (Q1Element::corner_det_f_min; <= 0: an element turned inside out), when
+  /// and in which element; +infinity / NaN / "" without Q1 elements.
+  bool has_elements() const { return !elements_.empty(); }
+  double det_f_min() const { return det_f_min_; }
+  double det_f_min_time() const { return det_f_min_t_; }
+  std::string det_f_min_element() const;
   /// First and last time with an active candidate; NaN when there was none.
   double contact_first() const { return contact_first_; }
   double contact_last() const { return contact_last_; }
@@ -204,6 +218,7 @@ class Recorder {
   /// Sets the errors of `s` and takes them into the maxima.
   void update_maxima(Sample& s);
   void measure_contact(const State& state, Sample& s);
+  void measure_elements(const State& state);
   void track_load_free(const Sample& previous, const Sample& s);
   void track_balance(const AcceptedStep& step, const Sample& s);
 
@@ -236,8 +251,14 @@ class Recorder {
   // Contact.
   int active_max_ = 0;
   double gap_violation_max_ = 0.0, penetration_max_ = 0.0, overlap_max_ = 0.0;
-  double surface_depth_max_ = 0.0;
+  double surface_depth_max_ = 0.0, surface_depth_relative_max_ = 0.0;
+  double surface_depth_relative_start_ = 0.0;
   long contact_events_ = 0;
+  // Q1 elements (Q1Element::corner_det_f_min).
+  std::vector<const Q1Element*> elements_;
+  double det_f_min_ = std::numeric_limits<double>::infinity();
+  double det_f_min_t_ = std::numeric_limits<double>::quiet_NaN();
+  int det_f_min_element_ = -1;
   double contact_first_ = std::numeric_limits<double>::quiet_NaN();
   double contact_last_ = std::numeric_limits<double>::quiet_NaN();
   double linear_error_max_ = 0.0;

@@ -670,7 +670,8 @@ std::string checks_html(const Json& summary) {
     out += fmt::format(
         "<tr><td><code>{}</code></td><td class=\"num\">{}</td><td class=\"num\">{}</td>"
         "<td>{}</td></tr>\n",
-        html_escape(name), value, sci(c["limit"].get<double>()),
+        html_escape(name), value,
+        (c.value("bound", std::string()) == "lower" ? "&gt; " : "") + sci(c["limit"].get<double>()),
         mark(c.value("result", "skipped")));
   }
   return out + "</table>\n";

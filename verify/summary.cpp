@@ -161,8 +161,15 @@ Summary summarize(const RunInfo& info, const System& system, const Recorder& rec
     c.penetration_max = recorder.penetration_max();
     c.overlap_max = recorder.overlap_max();
     c.surface_depth_max = recorder.surface_depth_max();
+    c.surface_depth_relative_max = recorder.surface_depth_relative_max();
+    c.surface_depth_relative_start = recorder.surface_depth_relative_start();
     c.contact_events = recorder.contact_events();
     s.contact = c;
+  }
+  if (recorder.has_elements()) {
+    s.det_f_min = recorder.det_f_min();
+    s.det_f_min_time = recorder.det_f_min_time();
+    s.det_f_min_element = recorder.det_f_min_element();
   }
   s.active_contacts = recorder.last().active_contacts;
   s.contact_pressure = info.contact_pressure;
@@ -241,6 +248,23 @@ Summary summarize(const RunInfo& info, const System& system, const Recorder& rec
   if (tolerances.penetration)
     s.checks.push_back(make_check("penetration", contact_figure(&ContactFigures::penetration_max),
                                   *tolerances.penetration, "the system has no contact"));
+  // The geometric checks are judged on every run that has what they
+  // measure: the mortar gap can hold while a body goes through the other
+  // (examples/known_wrong/gap_cross.toml), and an element can fold over at
+  // a corner while its Gauss points, all the energy sees, stay upright.
+  if (s.contact) {
+    const ContactFigures& c = *s.contact;
+    s.checks.push_back(
+        make_check("surface_depth",
+                   std::max(0.0, c.surface_depth_relative_max - c.surface_depth_relative_start),
+                   tolerances.surface_depth.value_or(kSurfaceDepthDefault)));
+  }
+  if (s.det_f_min) {
+    Check c = make_check("det_f_min", s.det_f_min, tolerances.det_f_min.value_or(0.0));
+    c.lower = true;
+    c.result = *s.det_f_min > c.limit ? "pass" : "fail";  // NaN fails
+    s.checks.push_back(c);
+  }
   if (tolerances.contact_pressure_spread)
     s.checks.push_back(make_check("contact_pressure_spread",
                                   max_pressure_spread(s.contact_pressure),
@@ -299,6 +323,7 @@ void finish_json(const Summary& s, nlohmann::ordered_json& j) {
     for (const auto& c : s.checks) {
       checks[c.name] = {
           {"value", optional_number(c.value)}, {"limit", c.limit}, {"result", c.result}};
+      if (c.lower) checks[c.name]["bound"] = "lower";
       if (!c.note.empty()) checks[c.name]["note"] = c.note;
     }
     j["checks"] = checks;
@@ -321,12 +346,19 @@ nlohmann::ordered_json static_json(const Summary& s) {
   j["cpu_seconds"] = s.cpu_seconds;
   j["potential_energy"] = s.potential_energy;
   j["constraint_residual_max"] = s.constraint_residual_max;
+  if (s.det_f_min) {
+    j["det_f_min"] = *s.det_f_min;
+    j["det_f_min_time"] = s.det_f_min_time;
+    j["det_f_min_element"] = s.det_f_min_element;
+  }
   if (s.contact) {
     j["active_contacts"] = s.active_contacts;
     j["gap_violation_max"] = s.contact->gap_violation_max;
     j["penetration_max"] = s.contact->penetration_max;
     j["overlap_max"] = s.contact->overlap_max;
     j["surface_depth_max"] = s.contact->surface_depth_max;
+    j["surface_depth_relative_max"] = s.contact->surface_depth_relative_max;
+    j["surface_depth_relative_start"] = s.contact->surface_depth_relative_start;
     if (!s.contact_pressure.empty()) j["contact_pressure"] = pressure_json(s.contact_pressure);
   }
   if (s.statics) j["statics"] = statics_json(*s.statics);
@@ -395,6 +427,11 @@ nlohmann::ordered_json to_json(const Summary& s) {
   if (!s.angular_momentum_balance_note.empty())
     j["angular_momentum_balance_note"] = s.angular_momentum_balance_note;
   j["constraint_residual_max"] = s.constraint_residual_max;
+  if (s.det_f_min) {
+    j["det_f_min"] = *s.det_f_min;
+    j["det_f_min_time"] = s.det_f_min_time;
+    j["det_f_min_element"] = s.det_f_min_element;
+  }
   if (s.contact) {
     const ContactFigures& c = *s.contact;
     j["contact_window"] = c.first ? nlohmann::ordered_json::array({*c.first, *c.last})
@@ -404,6 +441,8 @@ nlohmann::ordered_json to_json(const Summary& s) {
     j["penetration_max"] = c.penetration_max;
     j["overlap_max"] = c.overlap_max;
     j["surface_depth_max"] = c.surface_depth_max;
+    j["surface_depth_relative_max"] = c.surface_depth_relative_max;
+    j["surface_depth_relative_start"] = c.surface_depth_relative_start;
     j["contact_events"] = c.contact_events;
     if (!s.contact_pressure.empty()) j["contact_pressure"] = pressure_json(s.contact_pressure);
   }
@@ -473,6 +512,9 @@ void print_summary(std::ostream& out, const Summary& s, const std::string& dir, 
           fmt::format("{:.3e}", *s.angular_momentum_balance_rel_error_max));
   }
   row("max |Phi|", fmt::format("{:.3e}", s.constraint_residual_max));
+  if (s.det_f_min)
+    row("smallest det F", fmt::format("{:.3g} at an element corner, t = {:.4g} ({})", *s.det_f_min,
+                                      s.det_f_min_time, s.det_f_min_element));
   if (s.contact) {
     const ContactFigures& c = *s.contact;
     if (!s.static_analysis)
@@ -484,8 +526,9 @@ void print_summary(std::ostream& out, const Summary& s, const std::string& dir, 
         fmt::format("{:.3e}, {:.3e}", c.gap_violation_max, c.penetration_max));
     row("surface depth",
         fmt::format("{:.3e} (the deepest a surface node lay behind the other surface, "
-                    "geometric)",
-                    c.surface_depth_max));
+                    "geometric); {:.3g} of the edge it lay behind ({:.3g} at the start)",
+                    c.surface_depth_max, c.surface_depth_relative_max,
+                    c.surface_depth_relative_start));
     // Shown where the coverage barrier hides some: partly covered nodes.
     if (c.overlap_max > std::max(c.penetration_max, c.gap_violation_max))
       row("weighted overlap",
@@ -496,8 +539,10 @@ void print_summary(std::ostream& out, const Summary& s, const std::string& dir, 
   for (const auto& p : s.contact_pressure) row("contact " + p.pair, pressure_text(p));
   for (const auto& c : s.checks) {
     std::string verdict = "skipped: " + c.note;
-    if (c.result == "pass") verdict = fmt::format("pass: {:.3e} <= {}", *c.value, c.limit);
-    if (c.result == "fail") verdict = fmt::format("FAIL: {:.3e} > {}", *c.value, c.limit);
+    const char* within = c.lower ? ">" : "<=";
+    const char* beyond = c.lower ? "<=" : ">";
+    if (c.result == "pass") verdict = fmt::format("pass: {:.3e} {} {}", *c.value, within, c.limit);
+    if (c.result == "fail") verdict = fmt::format("FAIL: {:.3e} {} {}", *c.value, beyond, c.limit);
     row("check " + c.name, verdict);
   }
   row("output", dir + "/{history.csv,summary.json,report.html" +

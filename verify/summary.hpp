@@ -35,10 +35,14 @@ struct Tolerances {
   std::optional<double> gap_violation;
   std::optional<double> penetration;
   std::optional<double> contact_pressure_spread;  // max over the pairs of (max - min) / |mean|
+  // Judged on every run that has what they measure, with these defaults
+  // (verify/summary.cpp, summarize):
+  std::optional<double> surface_depth;  // default kSurfaceDepthDefault
+  std::optional<double> det_f_min;      // a lower bound, default 0
   bool any() const {
     return energy_rel || energy_balance_rel || linear_momentum || angular_momentum_rel ||
            angular_momentum_balance_rel || constraint || gap_violation || penetration ||
-           contact_pressure_spread;
+           contact_pressure_spread || surface_depth || det_f_min;
   }
 };
 
@@ -60,10 +64,12 @@ struct StaticsOutcome {
 struct ContactFigures {
   std::optional<double> first, last;  // the contact window; empty: no contact
   int active_contacts_max = 0;
-  double gap_violation_max = 0.0;  // max |Phi| over active candidates
-  double penetration_max = 0.0;    // max(0, -Phi) over inactive and penalized candidates
-  double overlap_max = 0.0;        // Recorder::overlap_max(): without the coverage barrier
-  double surface_depth_max = 0.0;  // Recorder::surface_depth_max(): geometric
+  double gap_violation_max = 0.0;           // max |Phi| over active candidates
+  double penetration_max = 0.0;             // max(0, -Phi) over inactive and penalized candidates
+  double overlap_max = 0.0;                 // Recorder::overlap_max(): without the coverage barrier
+  double surface_depth_max = 0.0;           // Recorder::surface_depth_max(): geometric
+  double surface_depth_relative_max = 0.0;  // the same, of the edge behind which
+  double surface_depth_relative_start = 0.0;  // and at the start
   long contact_events = 0;
 };
 
@@ -73,7 +79,15 @@ struct Check {
   double limit = 0.0;
   std::string result;  // "pass", "fail" or "skipped"
   std::string note;    // why it was skipped
+  bool lower = false;  // the limit is a lower bound: pass when value > limit
 };
+
+/// The default limit of the surface_depth check: how far, as a fraction of
+/// the edge it lies behind, a contact surface node may go behind the other
+/// surface beyond the start's depth. A corner's node lies behind a faceted
+/// face by about h sin(theta) / 3 <= h / 3 (docs/hard-cases.md); half an
+/// element is a body going through the other.
+inline constexpr double kSurfaceDepthDefault = 0.5;
 
 /// One component of the linear momentum judged on its own (dynamic runs
 /// whose linear momentum as a whole is not conserved).
@@ -122,7 +136,11 @@ struct Summary {
   std::optional<double> angular_momentum_balance_rel_error_max;
   std::string angular_momentum_balance_note;
   double constraint_residual_max = 0.0;
-  std::optional<ContactFigures> contact;       // with unilateral constraints
+  std::optional<ContactFigures> contact;  // with unilateral constraints
+  // With Q1 elements: Recorder::det_f_min, its time and element.
+  std::optional<double> det_f_min;
+  double det_f_min_time = 0.0;
+  std::string det_f_min_element;
   int active_contacts = 0;                     // at the last state
   std::vector<PairPressure> contact_pressure;  // per contact pair, at the last state
   std::optional<StaticsOutcome> statics;
