@@ -252,13 +252,44 @@ StepStats ContactStepper::substep(SubstepScheme& scheme, State& s, double h) {
     have_guess = true;
   }
   after_impact_.valid = false;
+  bool probing = true;
   for (int attempt = 0; attempt < max_attempts; ++attempt) {
     State trial = s;
     const ActiveSet::Targets targets = set_.targets(s, kept_);
     if (have_guess) guess.lambda = carried_multipliers(guess_state_active, guess_lambda, s);
+    // Where the solve's chord steps hand over to Newton's method the
+    // iterate is within about their last step of the solution: a node
+    // tensile, or (without impact location, whose bracket needs the
+    // converged end) penetrating, by more than that will be so at the
+    // solution too, and the solve stops there: the re-solve with the
+    // changed set starts from that iterate, and the Newton iteration that
+    // would have ended this solve is saved. Not where nodes found inside
+    // at the start, kept gaps or algebraic nodes take other ways below.
+    const bool probed = probing && inside_.empty() && !keep_deep_ && !system_.has_massless_nodes();
+    if (probed)
+      scheme.set_active_set_probe([&](const Vec& q, const Vec& lambda, const Vec& dq,
+                                      const Vec& dlambda) {
+        const Eigen::Index n_static = lambda.size() - static_cast<Eigen::Index>(s.active.size());
+        for (std::size_t k = 0; k < s.active.size(); ++k) {
+          const Eigen::Index i = n_static + static_cast<Eigen::Index>(k);
+          if (lambda[i] > std::abs(dlambda[i]) && !contains(pinned, s.active[k]) &&
+              !set_.penalized(s.active[k]))
+            return true;
+        }
+        if (impact_ == ImpactTreatment::Locate) return false;
+        const double margin = set_.gap_tolerance() + 2.0 * dq.cwiseAbs().maxCoeff();
+        for (int id = 0; id < system_.n_unilateral(); ++id)
+          if (!set_.is_active(s, id) && !set_.penalized(id) && set_.gap(id, q) < -margin)
+            return true;
+        return false;
+      });
     StepStats r = scheme.solve_substep(trial, h, targets.gap, have_guess ? &guess : nullptr);
+    if (probed) scheme.set_active_set_probe(nullptr);
     add_up(total, r);
-    if (!r.converged && algebraic_entered && !locate_algebraic &&
+    // A stopped solve's iterate serves the decisions below; it is never
+    // accepted (it changes the active set, or is solved out).
+    const bool stopped = r.stopped_early;
+    if (!r.converged && !stopped && algebraic_entered && !locate_algebraic &&
         impact_ == ImpactTreatment::Locate) {
       s = start;
       pinned.clear();
@@ -266,7 +297,7 @@ StepStats ContactStepper::substep(SubstepScheme& scheme, State& s, double h) {
       locate_algebraic = true;
       continue;
     }
-    if (!r.converged) {
+    if (!r.converged && !stopped) {
       // Nodes that keep their gap instead of being pulled to 0, and the
       // sub-step is solved again: the nodes found inside at its start
       // (settle_changed_functions); failing those, at the smallest step
@@ -326,6 +357,10 @@ StepStats ContactStepper::substep(SubstepScheme& scheme, State& s, double h) {
     }
     // 2. Inactive nodes penetrating at the end.
     const std::vector<int> penetrating = set_.penetrating(s, trial.q);
+    if (penetrating.empty() && stopped) {  // not so at the iterate after all: solve it out
+      probing = false;
+      continue;
+    }
     if (penetrating.empty()) {
       // Pulled to 0 (target 0, not closed at the start): under the
       // velocity update every such node, under the other treatments the

@@ -39,6 +39,8 @@
 //    lambda Phi(q_0) stays: the comparison).
 #pragma once
 
+#include <functional>
+
 #include "integrators/active_set.hpp"
 
 namespace emdae {
@@ -71,6 +73,18 @@ class SubstepScheme {
   /// theorem on that solve's last Jacobian. Empty where the scheme cannot
   /// give it.
   virtual Vec end_rate() { return {}; }
+
+  /// A test of the next solve_substep's iterate (positions, multipliers
+  /// laid out as State::lambda, and the last chord step's change of each)
+  /// where its chord steps reach their handoff (NewtonSolver::solve's
+  /// stop_at_handoff): true stops the solve there, unconverged, with
+  /// StepStats::stopped_early and the iterate in the state. Empty: none.
+  using ActiveSetProbe =
+      std::function<bool(const Vec& q, const Vec& lambda, const Vec& dq, const Vec& dlambda)>;
+  void set_active_set_probe(ActiveSetProbe probe) { probe_ = std::move(probe); }
+
+ protected:
+  ActiveSetProbe probe_;
 };
 
 /// Counters of the impact treatment, for benchmarks and tests.

@@ -167,7 +167,28 @@ StepStats MidpointFamilyStepper::solve_substep(State& state, double dt, const Ve
     const bool released = last_structure_.releases_one(
         state.active, dt, static_cast<Eigen::Index>(n + system_.n_constraints()), from_last);
     const bool same_structure = last_structure_.same_as_last(state.active, dt) && !guess;
-    r = newton_.solve(problem, x, problem.scale(), same_structure, released ? &from_last : nullptr);
+    // The contact stepper's test of the active set where the chord steps
+    // hand over to Newton's method (contact_step.hpp).
+    HandoffTest handoff;
+    if (probe_) {
+      const double kappa = problem.kappa();
+      handoff = [&, kappa](const Vec& xi, const Vec& dxi) {
+        return probe_(xi.head(n), kappa * xi.tail(m), dxi.head(n), kappa * dxi.tail(m));
+      };
+    }
+    r = newton_.solve(problem, x, problem.scale(), same_structure, released ? &from_last : nullptr,
+                      probe_ ? &handoff : nullptr);
+  }
+  if (r.stopped_at_handoff) {
+    last_.valid = false;
+    StepStats stats;
+    stats.stopped_early = true;
+    stats.iterations = r.iterations;
+    stats.residual = r.residual;
+    stats.message = r.message;
+    state.q = x.head(n);
+    state.lambda = problem.kappa() * x.tail(m);
+    return stats;
   }
   last_.valid = r.converged && !predictor_accepted;
   if (r.converged) {

@@ -7,6 +7,7 @@
 #include <sunmatrix/sunmatrix_sparse.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdlib>
 #include <exception>
 #include <stdexcept>
@@ -259,6 +260,19 @@ struct NewtonSolver::Impl : SundialsContext, SizedMachinery {
     }
   }
 
+  // d = J^-1 b with the factorization at hand (of this size).
+  bool solve_factored(const Vec& b, Vec& d) {
+    if (!klu || b.size() != n) return false;
+    d = Vec::Zero(n);
+    Vec rhs = b;
+    N_Vector nb = N_VMake_Serial(n, rhs.data(), ctx.get());
+    N_Vector nd = N_VMake_Serial(n, d.data(), ctx.get());
+    const int flag = SUNLinSolSolve(klu->get(), jmat.get(), nd, nb, 0.0);
+    N_VDestroy(nb);
+    N_VDestroy(nd);
+    return flag == SUNLS_SUCCESS && d.allFinite();
+  }
+
   static void error_cb(int, const char* module, const char* function, char* msg, void* data) {
     auto* self = static_cast<Impl*>(data);
     self->last_message = std::string(module) + "::" + function + ": " + msg;
@@ -318,7 +332,8 @@ KluSolver::Counters NewtonSolver::klu_counters() const {
 }
 
 NewtonResult NewtonSolver::solve(NewtonProblem& problem, Vec& x, const Vec& residual_scale,
-                                 bool same_structure, const std::vector<Eigen::Index>* from_last) {
+                                 bool same_structure, const std::vector<Eigen::Index>* from_last,
+                                 const HandoffTest* stop_at_handoff) {
   Impl& m = *impl_;
   const int n = problem.size();
   if (x.size() != n || residual_scale.size() != n)
@@ -393,7 +408,7 @@ NewtonResult NewtonSolver::solve(NewtonProblem& problem, Vec& x, const Vec& resi
     double r = scaled_max(f, residual_scale);
     const double handoff = settings_.chord_handoff * settings_.tolerance;
     Vec xc = x, d, x1, f1;
-    bool first_rejected = false;
+    bool first_rejected = false, stopped = false;
     while (r > settings_.tolerance && (chords == 0 || r > handoff) &&
            chords < settings_.max_chord_steps && direction(f, d)) {
       x1 = xc + d;
@@ -406,6 +421,24 @@ NewtonResult NewtonSolver::solve(NewtonProblem& problem, Vec& x, const Vec& resi
       std::swap(xc, x1);
       std::swap(f, f1);
       ++chords;
+      if (stop_at_handoff && *stop_at_handoff && r > settings_.tolerance && r <= handoff &&
+          (*stop_at_handoff)(xc, d)) {
+        stopped = true;
+        break;
+      }
+    }
+    if (stopped) {
+      // The factorization at hand stays the last (factored_last_solve as
+      // it was): a re-solve that releases one unknown chords on it.
+      x = std::move(xc);
+      m.chord_steps += chords;
+      m.chord_backoff = 1;
+      NewtonResult r_stop;
+      r_stop.iterations = chords;
+      r_stop.residual = r;
+      r_stop.stopped_at_handoff = true;
+      r_stop.message = "stopped at the chord steps' handoff";
+      return r_stop;
     }
     if (chords > 0) {
       x0 = std::move(x);
@@ -540,15 +573,7 @@ bool NewtonSolver::guess_meets_tolerance(NewtonProblem& problem, const Vec& x,
 
 bool NewtonSolver::solve_with_last_jacobian(const Vec& b, Vec& d) {
   Impl& m = *impl_;
-  if (!m.factored_last_solve || !m.klu || b.size() != m.n) return false;
-  d = Vec::Zero(m.n);
-  Vec rhs = b;
-  N_Vector nb = N_VMake_Serial(m.n, rhs.data(), m.ctx.get());
-  N_Vector nd = N_VMake_Serial(m.n, d.data(), m.ctx.get());
-  const int flag = SUNLinSolSolve(m.klu->get(), m.jmat.get(), nd, nb, 0.0);
-  N_VDestroy(nb);
-  N_VDestroy(nd);
-  return flag == SUNLS_SUCCESS && d.allFinite();
+  return m.factored_last_solve && m.solve_factored(b, d);
 }
 
 }  // namespace emdae

@@ -12,6 +12,7 @@
 #pragma once
 
 #include <cmath>
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -90,7 +91,17 @@ struct NewtonResult {
   int iterations = 0;
   double residual = 0.0;  // final max_i |s_i F_i|
   std::string message;    // KINSOL's flag name and, on failure, its last error
+  // Not converged: stopped where the chord steps reached their handoff,
+  // because the caller's test said so (NewtonSolver::solve's stop_at_handoff).
+  bool stopped_at_handoff = false;
 };
+
+/// A caller's test of an iterate x where the chord steps that start a solve
+/// reach their handoff (the residual below chord_handoff times the
+/// tolerance), with the last chord step dx (an estimate of how far x still
+/// is from the solution: the steps contract tenfold or more). True: the
+/// solve stops there, unconverged, with x (NewtonResult::stopped_at_handoff).
+using HandoffTest = std::function<bool(const Vec& x, const Vec& dx)>;
 
 /// The active contacts and step length of a stepper's last Newton solve:
 /// a solve with the same ones has the Jacobian structure of the last
@@ -168,9 +179,15 @@ class NewtonSolver {
   /// is unknown i's index among the last solve's. Unless jacobian_reuse is
   /// 1, the solve then starts with the same chord steps, on the last
   /// factorization with the released unknown's row replaced by x_k = 0.
+  ///
+  /// `stop_at_handoff`: asked where those chord steps reach their handoff;
+  /// where it says so the solve stops there (a contact stepper whose
+  /// active set will change at the solution: its re-solve starts from
+  /// here, and the Newton iteration that would end this one is saved).
   NewtonResult solve(NewtonProblem& problem, Vec& x, const Vec& residual_scale,
                      bool same_structure = false,
-                     const std::vector<Eigen::Index>* from_last = nullptr);
+                     const std::vector<Eigen::Index>* from_last = nullptr,
+                     const HandoffTest* stop_at_handoff = nullptr);
   /// The residual at x, if it meets the tolerance (max_i |s_i F_i|) and the
   /// energy and angular balances: x is accepted as the solution without an
   /// iteration (KINSOL accepts a guess only within 0.01 of the tolerance).

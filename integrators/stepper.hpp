@@ -53,6 +53,9 @@ struct StepStats {
   // own corrector, a failed start), and the failure message leaves it out.
   double residual = 0.0;
   std::string message;
+  // A contact sub-step's solve stopped before convergence because its
+  // active set changes at the solution (SubstepScheme::set_active_set_probe).
+  bool stopped_early = false;
   // Contact events of the step (integrators/active_set.hpp): entries and
   // exits over its accepted sub-steps, and their sum.
   int contact_events = 0;
