@@ -161,10 +161,10 @@ StepStats MidpointFamilyStepper::solve_substep(State& state, double dt, const Ve
   } else {
     // A solve from the predictor whose last factored Jacobian had the same
     // active set and step length starts with a chord step (newton.hpp).
-    // A re-solve with one contact released starts with chord steps on the
-    // last factorization with that contact's row replaced (newton.hpp).
+    // A re-solve with contacts released starts with chord steps on the
+    // last factorization with their rows replaced (newton.hpp).
     std::vector<Eigen::Index> from_last;
-    const bool released = last_structure_.releases_one(
+    const bool released = last_structure_.releases(
         state.active, dt, static_cast<Eigen::Index>(n + system_.n_constraints()), from_last);
     const bool same_structure = last_structure_.same_as_last(state.active, dt) && !guess;
     // The contact stepper's test of the active set where the chord steps

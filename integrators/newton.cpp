@@ -6,6 +6,7 @@
 #include <sundials/sundials_linearsolver.h>
 #include <sunmatrix/sunmatrix_sparse.h>
 
+#include <Eigen/LU>
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
@@ -350,17 +351,20 @@ NewtonResult NewtonSolver::solve(NewtonProblem& problem, Vec& x, const Vec& resi
     --m.chord_skip;
     chord = false;
   }
-  // A solve that releases one unknown of the last (from_last, see the
-  // header): chord steps with the last factorization, the released
-  // unknown's row replaced by x_k = 0 (Sherman-Morrison: with z = J^-1 e_k
-  // and w = e_k - J^T e_k, (J + e_k w^T)^-1 b = y - z (w . y) / (1 + w . z),
-  // y = J^-1 b; one more solve, once). Other unknowns keep their places
-  // through the map.
-  Eigen::Index released = -1;
-  Vec z_released, w_released;
-  double denominator = 0.0;
+  // A solve that releases some unknowns of the last (from_last, see the
+  // header): chord steps with the last factorization, each released
+  // unknown's row replaced by x_k = 0 (Woodbury: with E the released
+  // unknowns' unit columns, Z = J^-1 E and W = E - J^T E, (J + E W^T)^-1 b
+  // = y - Z C^-1 (W^T y), C = I + W^T Z, y = J^-1 b; one more solve per
+  // released unknown, once; for one, Sherman-Morrison). Other unknowns keep
+  // their places through the map.
+  std::vector<Eigen::Index> released;
+  Eigen::MatrixXd z_released, w_released;
+  Eigen::PartialPivLU<Eigen::MatrixXd> capacitance;
+  const Eigen::Index n_released = m.n - n;
   if (!eligible && from_last && settings_.jacobian_reuse != 1 && m.factored_last_solve &&
-      m.n == n + 1 && static_cast<int>(from_last->size()) == n && m.jac.rows() == m.n) {
+      n_released >= 1 && n_released <= static_cast<Eigen::Index>(SolveStructure::kMaxReleased) &&
+      static_cast<int>(from_last->size()) == n && m.jac.rows() == m.n) {
     std::vector<bool> kept(static_cast<std::size_t>(m.n), false);
     bool one_to_one = true;
     for (const Eigen::Index i : *from_last) {
@@ -371,27 +375,47 @@ NewtonResult NewtonSolver::solve(NewtonProblem& problem, Vec& x, const Vec& resi
       kept[static_cast<std::size_t>(i)] = true;
     }
     for (Eigen::Index k = 0; one_to_one && k < m.n; ++k)
-      if (!kept[static_cast<std::size_t>(k)]) released = k;
-    if (released >= 0) {
-      w_released = Vec::Zero(m.n);
-      w_released[released] = 1.0;
+      if (!kept[static_cast<std::size_t>(k)]) released.push_back(k);
+    if (static_cast<Eigen::Index>(released.size()) == n_released) {
+      const Eigen::Index nr = n_released;
+      w_released = Eigen::MatrixXd::Zero(m.n, nr);
+      z_released.resize(m.n, nr);
+      std::vector<Eigen::Index> slot(static_cast<std::size_t>(m.n), -1);
+      for (Eigen::Index r = 0; r < nr; ++r) {
+        w_released(released[static_cast<std::size_t>(r)], r) = 1.0;
+        slot[static_cast<std::size_t>(released[static_cast<std::size_t>(r)])] = r;
+      }
       for (Eigen::Index c = 0; c < m.jac.outerSize(); ++c)
         for (SparseMatrix::InnerIterator it(m.jac, c); it; ++it)
-          if (it.row() == released) w_released[c] -= it.value();
-      Vec e = Vec::Zero(m.n);
-      e[released] = 1.0;
-      if (solve_with_last_jacobian(e, z_released)) denominator = 1.0 + w_released.dot(z_released);
-      if (!(std::abs(denominator) > 1e-12)) released = -1;
+          if (const Eigen::Index r = slot[static_cast<std::size_t>(it.row())]; r >= 0)
+            w_released(c, r) -= it.value();
+      bool solved = true;
+      for (Eigen::Index r = 0; solved && r < nr; ++r) {
+        Vec e = Vec::Zero(m.n), z;
+        e[released[static_cast<std::size_t>(r)]] = 1.0;
+        solved = solve_with_last_jacobian(e, z);
+        if (solved) z_released.col(r) = z;
+      }
+      if (solved) {
+        const Eigen::MatrixXd c =
+            Eigen::MatrixXd::Identity(nr, nr) + w_released.transpose() * z_released;
+        capacitance.compute(c);
+        // (for one: |1 + w . z| > 1e-12, as before)
+        if (!(std::abs(capacitance.determinant()) > 1e-12)) solved = false;
+      }
+      if (!solved) released.clear();
+    } else {
+      released.clear();
     }
   }
-  const bool release_chord = released >= 0;
-  // The chord direction d = -J_last^-1 f (or the released one's).
+  const bool release_chord = !released.empty();
+  // The chord direction d = -J_last^-1 f (or the released ones').
   const auto direction = [&](const Vec& f, Vec& d) {
     if (!release_chord) return solve_with_last_jacobian(-f, d);
     Vec b = Vec::Zero(m.n), y;
     for (int i = 0; i < n; ++i) b[(*from_last)[static_cast<std::size_t>(i)]] = -f[i];
     if (!solve_with_last_jacobian(b, y)) return false;
-    const Vec full = y - z_released * (w_released.dot(y) / denominator);
+    const Vec full = y - z_released * capacitance.solve(w_released.transpose() * y);
     d.resize(n);
     for (int i = 0; i < n; ++i) d[i] = full[(*from_last)[static_cast<std::size_t>(i)]];
     return d.allFinite();

@@ -118,20 +118,24 @@ class SolveStructure {
     h_ = h;
     return same;
   }
-  /// Whether (active, h) is the one noted last with one contact released
-  /// (the same step length): then from_last maps each unknown (n_fixed
-  /// positions and velocities or positions and the system's multipliers,
-  /// then one multiplier per active contact) to its index in the last
-  /// solve's (NewtonSolver::solve's from_last). Notes nothing.
-  bool releases_one(const std::vector<int>& active, double h, Eigen::Index n_fixed,
-                    std::vector<Eigen::Index>& from_last) const {
-    if (!valid_ || std::abs(h_ - h) > 1e-6 * h || active.size() + 1 != active_.size()) return false;
+  /// Whether (active, h) is the one noted last with some contacts released
+  /// (one to kMaxReleased; the same step length): then from_last maps each
+  /// unknown (n_fixed positions and velocities or positions and the
+  /// system's multipliers, then one multiplier per active contact) to its
+  /// index in the last solve's (NewtonSolver::solve's from_last). Notes
+  /// nothing.
+  static constexpr std::size_t kMaxReleased = 4;
+  bool releases(const std::vector<int>& active, double h, Eigen::Index n_fixed,
+                std::vector<Eigen::Index>& from_last) const {
+    if (!valid_ || std::abs(h_ - h) > 1e-6 * h || active.size() >= active_.size() ||
+        active_.size() - active.size() > kMaxReleased)
+      return false;
     from_last.resize(static_cast<std::size_t>(n_fixed) + active.size());
     for (Eigen::Index i = 0; i < n_fixed; ++i) from_last[static_cast<std::size_t>(i)] = i;
-    std::size_t j = 0;  // active is active_ without one entry, in the same order
+    std::size_t j = 0;  // active is active_ without some entries, in the same order
     for (std::size_t k = 0; k < active.size(); ++k, ++j) {
-      if (active_[j] != active[k]) ++j;
-      if (j >= active_.size() || active_[j] != active[k]) return false;
+      while (j < active_.size() && active_[j] != active[k]) ++j;
+      if (j >= active_.size()) return false;
       from_last[static_cast<std::size_t>(n_fixed) + k] = n_fixed + static_cast<Eigen::Index>(j);
     }
     return true;
@@ -174,11 +178,12 @@ class NewtonSolver {
   /// reproducible). A solve that fails after chord steps is repeated by
   /// Newton's method from x. (docs/performance.md §18, §19.)
   ///
-  /// `from_last`: this problem's unknowns are the last solve's but one,
-  /// released (a contact released, the same step length), and from_last[i]
-  /// is unknown i's index among the last solve's. Unless jacobian_reuse is
-  /// 1, the solve then starts with the same chord steps, on the last
-  /// factorization with the released unknown's row replaced by x_k = 0.
+  /// `from_last`: this problem's unknowns are the last solve's but a few
+  /// (up to SolveStructure::kMaxReleased), released (contacts released,
+  /// the same step length), and from_last[i] is unknown i's index among the
+  /// last solve's. Unless jacobian_reuse is 1, the solve then starts with
+  /// the same chord steps, on the last factorization with each released
+  /// unknown's row replaced by x_k = 0.
   ///
   /// `stop_at_handoff`: asked where those chord steps reach their handoff;
   /// where it says so the solve stops there (a contact stepper whose
