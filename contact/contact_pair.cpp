@@ -2,6 +2,7 @@
 
 #include <memory>
 #include <utility>
+#include <vector>
 
 namespace emdae {
 
@@ -38,6 +39,21 @@ const ContactPair& add_mortar_contact(Model& model, const std::string& slave,
     model.modify_mass(slave);
     model.modify_mass(master);
     pair.modified_mass = true;
+  }
+  // Surfaces that meet (a block's bottom and its sides, each a slave of
+  // its own) are one chain for the surface depth, whichever pair declared
+  // them: every pair's chains take in every other pair's surfaces joined
+  // to them, until nothing more joins.
+  std::vector<MortarContact*> mortars{contact.get()};
+  for (const auto& set : model.system().unilateral())
+    if (auto* other = dynamic_cast<MortarContact*>(set.get())) mortars.push_back(other);
+  for (bool joined = true; joined;) {
+    joined = false;
+    for (MortarContact* a : mortars)
+      for (const MortarContact* b : mortars)
+        if (a != b)
+          for (const ContactSurface* chain : {&b->slave_surface(), &b->master_surface()})
+            joined = a->add_joined_surface(chain->edges) || joined;
   }
   return model.add_contact(std::move(pair), std::move(contact));
 }

@@ -142,6 +142,29 @@ MortarContact::MortarContact(const System& system, ContactSurface slave, Contact
     for (int node : e)
       if (std::find(master_nodes_.begin(), master_nodes_.end(), node) == master_nodes_.end())
         master_nodes_.push_back(node);
+  slave_joined_ = slave_.edges;
+  master_joined_ = master_.edges;
+}
+
+bool MortarContact::add_joined_surface(const std::vector<std::array<int, 2>>& edges) {
+  const auto join = [&](std::vector<std::array<int, 2>>& chain) {
+    const auto has_node = [&](int node) {
+      return std::any_of(chain.begin(), chain.end(),
+                         [&](const std::array<int, 2>& e) { return e[0] == node || e[1] == node; });
+    };
+    const bool new_edges = std::any_of(edges.begin(), edges.end(), [&](const auto& e) {
+      return std::find(chain.begin(), chain.end(), e) == chain.end();
+    });
+    const bool meets = std::any_of(edges.begin(), edges.end(),
+                                   [&](const auto& e) { return has_node(e[0]) || has_node(e[1]); });
+    if (!new_edges || !meets) return false;
+    for (const auto& e : edges)
+      if (std::find(chain.begin(), chain.end(), e) == chain.end()) chain.push_back(e);
+    return true;
+  };
+  const bool slave = join(slave_joined_);
+  const bool master = join(master_joined_);
+  return slave || master;
 }
 
 SurfaceDepth MortarContact::surface_depth(const Vec& q) const {
@@ -150,11 +173,11 @@ SurfaceDepth MortarContact::surface_depth(const Vec& q) const {
   // cuts into a fine face by a fraction of its own edges, not the face's).
   SurfaceDepth deepest;
   const auto measure = [&](const std::vector<int>& nodes, const ContactSurface& own,
-                           const ContactSurface& other) {
-    const Eigen::AlignedBox2d box = chain_box(other.edges, q);
+                           const std::vector<std::array<int, 2>>& other) {
+    const Eigen::AlignedBox2d box = chain_box(other, q);
     std::map<int, double> own_edge;
     for (int node : nodes) {
-      const Behind b = depth_behind(other.edges, q, node_position(q, node), box);
+      const Behind b = depth_behind(other, q, node_position(q, node), box);
       if (!(b.depth > 0.0)) continue;
       if (own_edge.empty()) own_edge = longest_edge_at(own.edges, q);
       const double h = std::max(b.edge, own_edge[node]);
@@ -162,8 +185,8 @@ SurfaceDepth MortarContact::surface_depth(const Vec& q) const {
       deepest.relative = std::max(deepest.relative, h > 0.0 ? b.depth / h : 0.0);
     }
   };
-  measure(slave_nodes_, slave_, master_);
-  measure(master_nodes_, master_, slave_);
+  measure(slave_nodes_, slave_, master_joined_);
+  measure(master_nodes_, master_, slave_joined_);
   return deepest;
 }
 

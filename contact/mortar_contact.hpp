@@ -62,11 +62,22 @@ class MortarContact final : public UnilateralConstraints {
   /// their left) or behind the closest vertex's pseudo-normal (the sum of
   /// its two edges' outward normals); at a chain's open end it is not
   /// decided (counted as outside). Returns the largest such distance.
+  /// Each chain is taken with the surfaces joined to it (add_joined_surface).
   SurfaceDepth surface_depth(const Vec& q) const override;
+  /// Another contact surface's edges: where they share a node with the
+  /// slave or the master chain, or with what was joined to it before, they
+  /// join that chain for surface_depth. A block's side declared as a slave
+  /// of its own beside its bottom: alone, an open side face is a half-plane,
+  /// and a node under the bottom face lies behind it. Returns whether
+  /// anything joined (callers repeat until nothing does: joins are
+  /// transitive).
+  bool add_joined_surface(const std::vector<std::array<int, 2>>& edges);
   std::string describe(int i) const override;
   /// epsilon w_A when the contact is penalized, else 0.
   double penalty(int i) const override;
 
+  const ContactSurface& slave_surface() const { return slave_; }
+  const ContactSurface& master_surface() const { return master_; }
   int slave_node(int i) const { return slave_nodes_[static_cast<std::size_t>(i)]; }
   /// Mortar weight int N_A dGamma of slave node i in the reference configuration.
   double weight(int i) const { return weights_[static_cast<std::size_t>(i)]; }
@@ -88,7 +99,10 @@ class MortarContact final : public UnilateralConstraints {
   ContactSurface slave_, master_;
   ContactOptions options_;
   std::vector<int> slave_nodes_;
-  std::vector<int> master_nodes_;               // for surface_depth()
+  std::vector<int> master_nodes_;  // for surface_depth()
+  // The chains surface_depth() measures against: the own edges and those
+  // of joined surfaces (add_joined_surface).
+  std::vector<std::array<int, 2>> slave_joined_, master_joined_;
   std::vector<std::array<int, 2>> node_edges_;  // slave edges at each slave node (-1: none)
   std::vector<double> weights_;
   double mean_master_length_ = 0.0;

@@ -312,6 +312,10 @@ void Builder::parse_tolerances(const Fields& f) {
                "the scene has no [[contacts]] whose surfaces could be checked, received " +
                    show(*f.find("surface_depth")));
   t.det_f_min = f.optional_number("det_f_min");
+  if (t.det_f_min && model().bodies().empty())
+    f.fail_key("det_f_min",
+               "the scene has no [[bodies]] whose elements could be checked, received " +
+                   show(*f.find("det_f_min")));
   if (t.det_f_min && !(*t.det_f_min >= 0.0 && *t.det_f_min < 1.0))
     f.fail_key("det_f_min",
                "must be in [0, 1): det F at an element corner must stay above it, received " +

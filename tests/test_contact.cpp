@@ -652,6 +652,35 @@ TEST(MortarContact, SurfaceDepthIsTheDeepestNodeBehindTheOtherSurface) {
               0.05 / (Eigen::Vector2d(3.0, 1.5) - Eigen::Vector2d(1.95, 0.95)).norm(), 1e-15);
 }
 
+// A block's right side declared as a slave of its own (beside its bottom,
+// another pair's slave): alone, the open side face is a half-plane, and a
+// master node under the bottom face, outside the block, lies behind it (an
+// outside test's 14 false alarms, 2026-11-28). Joined with the bottom
+// (MortarContact::add_joined_surface, as add_mortar_contact does for every
+// pair), the node is in front of the bottom, its closest part.
+TEST(MortarContact, SurfaceDepthTakesTheSurfacesJoinedToAChain) {
+  System s(2);
+  for (const auto& [x, y] : {std::pair{0.0, 1.3},
+                             {1.0, 1.0},
+                             {1.0, 2.0},
+                             {0.0, 2.0},
+                             {2.0, 0.5},
+                             {0.8, 1.05},
+                             {-1.0, 0.5}})
+    s.add_node(Eigen::Vector2d(x, y), Eigen::Vector2d::Zero());
+  const ContactSurface bottom{"block.bottom", {{0, 1}}}, right{"block.right", {{1, 2}}};
+  const ContactSurface base{"base.top", {{4, 5}, {5, 6}}};
+  MortarContact side(s, right, base, "side");
+  const Vec q = s.initial_positions();
+  // Node 5 is 0.01 below the bottom's line, 0.2 from the side's.
+  EXPECT_NEAR(side.surface_depth(q).depth, 0.2, 1e-15);
+  EXPECT_FALSE(side.add_joined_surface(base.edges));  // nothing new meets the chains
+  EXPECT_FALSE(side.add_joined_surface({{3, 0}}));    // new, but meets neither
+  EXPECT_TRUE(side.add_joined_surface(bottom.edges));
+  EXPECT_FALSE(side.add_joined_surface(bottom.edges));  // already joined
+  EXPECT_EQ(side.surface_depth(q).depth, 0.0);
+}
+
 TEST(RingImpact, EnergyMomentumConservesThroughImpact) {
   // Rings 0.5 apart closing at 20: contact from t ~ 0.025 on, over ~1 s.
   const RingImpact scene = ring_impact(0.5, 10.0, 4.0);

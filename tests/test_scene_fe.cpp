@@ -373,6 +373,11 @@ std::vector<Malformed> malformed_fe_scenes() {
        kTime + kRings + "[tolerances]\nsurface_depth = 0.2\n",
        "surface_depth",
        {"key 'tolerances.surface_depth'", "no [[contacts]]"}},
+      {"det_f_min_without_bodies",
+       kTime + "[[particles]]\nname = \"a\"\nmass = 1.0\nposition = [0.0, 0.0]\n\n"
+               "[tolerances]\ndet_f_min = 0.2\n",
+       "det_f_min",
+       {"key 'tolerances.det_f_min'", "no [[bodies]]"}},
       {"det_f_min_not_below_one",
        kStatic + "\n[tolerances]\ndet_f_min = 1.0\n",
        "det_f_min",

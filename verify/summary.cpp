@@ -526,7 +526,8 @@ void print_summary(std::ostream& out, const Summary& s, const std::string& dir, 
         fmt::format("{:.3e}, {:.3e}", c.gap_violation_max, c.penetration_max));
     row("surface depth",
         fmt::format("{:.3e} (the deepest a surface node lay behind the other surface, "
-                    "geometric); {:.3g} of the edge it lay behind ({:.3g} at the start)",
+                    "geometric); {:.3g} of the coarser local surface edge ({:.3g} at the start; "
+                    "the check judges the rise)",
                     c.surface_depth_max, c.surface_depth_relative_max,
                     c.surface_depth_relative_start));
     // Shown where the coverage barrier hides some: partly covered nodes.
