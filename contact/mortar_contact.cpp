@@ -182,7 +182,8 @@ SurfaceDepth MortarContact::surface_depth(const Vec& q) const {
       if (own_edge.empty()) own_edge = longest_edge_at(own.edges, q);
       const double h = std::max(b.edge, own_edge[node]);
       deepest.depth = std::max(deepest.depth, b.depth);
-      deepest.relative = std::max(deepest.relative, h > 0.0 ? b.depth / h : 0.0);
+      const double relative = h > 0.0 ? b.depth / h : 0.0;
+      if (relative > deepest.relative) deepest.relative = relative, deepest.node = node;
     }
   };
   measure(slave_nodes_, slave_, master_joined_);

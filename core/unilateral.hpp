@@ -25,6 +25,7 @@ namespace emdae {
 struct SurfaceDepth {
   double depth = 0.0;     // a distance
   double relative = 0.0;  // a fraction of the local edge length (the coarser side's)
+  int node = -1;          // the system node of the largest relative depth; -1: none
 };
 
 class UnilateralConstraints {

@@ -442,6 +442,14 @@ TEST(SceneFeRun, GeometricChecksAreJudgedOnEveryRunWithTheirDefaultsOrTheScenesL
   EXPECT_EQ(s["checks"]["surface_depth"]["limit"], 0.5);
   EXPECT_EQ(s["checks"]["surface_depth"]["value"].get<double>(),
             depth - s["surface_depth_relative_start"].get<double>());
+  // Where and when: a node of one of its two pairs, within the run.
+  const std::string where = s["surface_depth_where"].get<std::string>();
+  EXPECT_EQ(where.rfind("node ", 0), 0u) << where;
+  EXPECT_NE(where.find(" of contact '"), std::string::npos) << where;
+  EXPECT_GT(s["surface_depth_time"].get<double>(), 0.0);
+  EXPECT_LE(s["surface_depth_time"].get<double>(), s["t_reached"].get<double>());
+  EXPECT_GT(s["det_f_min_time"].get<double>(), 0.0);
+  EXPECT_NE(s["det_f_min_element"].get<std::string>().find("of body 'square'"), std::string::npos);
   r = emdae("run " + scene + " -q --set output.vtu_every=0 --set tolerances.det_f_min=" +
                 std::to_string(det_f + 0.01) + " --set tolerances.surface_depth=" +
                 std::to_string(depth / 2) + " --out " + quote(dir / "b"),

@@ -188,10 +188,16 @@ void Recorder::measure_contact(const State& state, Sample& s) {
     const double overlap = system_.unilateral_overlap_gap(id, state.q);
     if (std::isnan(overlap) || overlap < 0) keep_max(overlap_max_, -overlap);
   }
-  for (const auto& set : system_.unilateral()) {
-    const SurfaceDepth d = set->surface_depth(state.q);
+  const auto& sets = system_.unilateral();
+  for (std::size_t k = 0; k < sets.size(); ++k) {
+    const SurfaceDepth d = sets[k]->surface_depth(state.q);
     keep_max(surface_depth_max_, d.depth);
-    keep_max(surface_depth_relative_max_, d.relative);
+    if (d.relative > surface_depth_relative_max_) {
+      surface_depth_relative_max_ = d.relative;
+      surface_depth_t_ = state.t;
+      surface_depth_node_ = d.node;
+      surface_depth_set_ = static_cast<int>(k);
+    }
   }
   if (s.active_contacts > 0) {
     if (std::isnan(contact_first_)) contact_first_ = s.t;
@@ -214,6 +220,12 @@ void Recorder::measure_elements(const State& state) {
       det_f_min_element_ = static_cast<int>(k);
     }
   }
+}
+
+std::string Recorder::surface_depth_where() const {
+  if (surface_depth_set_ < 0 || surface_depth_node_ < 0) return "";
+  return "node " + std::to_string(surface_depth_node_) + " of contact '" +
+         system_.unilateral()[static_cast<std::size_t>(surface_depth_set_)]->name() + "'";
 }
 
 std::string Recorder::det_f_min_element() const {
@@ -444,6 +456,7 @@ void Recorder::save(std::ostream& out) const {
                    surface_depth_max_,
                    surface_depth_relative_max_,
                    surface_depth_relative_start_,
+                   surface_depth_t_,
                    det_f_min_,
                    det_f_min_t_})
     put(out, x);
@@ -459,6 +472,8 @@ void Recorder::save(std::ostream& out) const {
   put(out, newton_max_per_step_);
   put(out, cutbacks_);
   put(out, det_f_min_element_);
+  put(out, surface_depth_node_);
+  put(out, surface_depth_set_);
 }
 
 void Recorder::restore(std::istream& in) {
@@ -493,6 +508,7 @@ void Recorder::restore(std::istream& in) {
                     &surface_depth_max_,
                     &surface_depth_relative_max_,
                     &surface_depth_relative_start_,
+                    &surface_depth_t_,
                     &det_f_min_,
                     &det_f_min_t_})
     *x = get<double>(in);
@@ -508,7 +524,11 @@ void Recorder::restore(std::istream& in) {
   newton_max_per_step_ = get<int>(in);
   cutbacks_ = get<long>(in);
   det_f_min_element_ = get<int>(in);
-  if (det_f_min_element_ >= static_cast<int>(elements_.size()))
+  surface_depth_node_ = get<int>(in);
+  surface_depth_set_ = get<int>(in);
+  if (det_f_min_element_ >= static_cast<int>(elements_.size()) ||
+      surface_depth_set_ >= static_cast<int>(system_.unilateral().size()) ||
+      surface_depth_node_ >= system_.n_nodes())
     throw std::runtime_error("the checkpoint's recorder is of another system");
 }
 

@@ -179,6 +179,10 @@ class Recorder {
   /// the run and at the start (bodies that start overlapping: a press fit).
   double surface_depth_relative_max() const { return surface_depth_relative_max_; }
   double surface_depth_relative_start() const { return surface_depth_relative_start_; }
+  /// When and where the largest relative depth was ("node 17 of contact
+  /// 'squash'", the system's node); NaN / "" when no node lay behind.
+  double surface_depth_time() const { return surface_depth_t_; }
+  std::string surface_depth_where() const;
   long contact_events() const { return contact_events_; }
 
   /// Q1 bodies: the smallest det F at an element corner over the run
@@ -253,6 +257,8 @@ class Recorder {
   double gap_violation_max_ = 0.0, penetration_max_ = 0.0, overlap_max_ = 0.0;
   double surface_depth_max_ = 0.0, surface_depth_relative_max_ = 0.0;
   double surface_depth_relative_start_ = 0.0;
+  double surface_depth_t_ = std::numeric_limits<double>::quiet_NaN();
+  int surface_depth_node_ = -1, surface_depth_set_ = -1;
   long contact_events_ = 0;
   // Q1 elements (Q1Element::corner_det_f_min).
   std::vector<const Q1Element*> elements_;

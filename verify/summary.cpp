@@ -163,6 +163,8 @@ Summary summarize(const RunInfo& info, const System& system, const Recorder& rec
     c.surface_depth_max = recorder.surface_depth_max();
     c.surface_depth_relative_max = recorder.surface_depth_relative_max();
     c.surface_depth_relative_start = recorder.surface_depth_relative_start();
+    c.surface_depth_time = recorder.surface_depth_time();
+    c.surface_depth_where = recorder.surface_depth_where();
     c.contact_events = recorder.contact_events();
     s.contact = c;
   }
@@ -359,6 +361,10 @@ nlohmann::ordered_json static_json(const Summary& s) {
     j["surface_depth_max"] = s.contact->surface_depth_max;
     j["surface_depth_relative_max"] = s.contact->surface_depth_relative_max;
     j["surface_depth_relative_start"] = s.contact->surface_depth_relative_start;
+    if (!s.contact->surface_depth_where.empty()) {
+      j["surface_depth_time"] = s.contact->surface_depth_time;
+      j["surface_depth_where"] = s.contact->surface_depth_where;
+    }
     if (!s.contact_pressure.empty()) j["contact_pressure"] = pressure_json(s.contact_pressure);
   }
   if (s.statics) j["statics"] = statics_json(*s.statics);
@@ -443,6 +449,10 @@ nlohmann::ordered_json to_json(const Summary& s) {
     j["surface_depth_max"] = c.surface_depth_max;
     j["surface_depth_relative_max"] = c.surface_depth_relative_max;
     j["surface_depth_relative_start"] = c.surface_depth_relative_start;
+    if (!c.surface_depth_where.empty()) {
+      j["surface_depth_time"] = c.surface_depth_time;
+      j["surface_depth_where"] = c.surface_depth_where;
+    }
     j["contact_events"] = c.contact_events;
     if (!s.contact_pressure.empty()) j["contact_pressure"] = pressure_json(s.contact_pressure);
   }
@@ -525,11 +535,15 @@ void print_summary(std::ostream& out, const Summary& s, const std::string& dir, 
     row("gap violation, penetration",
         fmt::format("{:.3e}, {:.3e}", c.gap_violation_max, c.penetration_max));
     row("surface depth",
-        fmt::format("{:.3e} (the deepest a surface node lay behind the other surface, "
-                    "geometric); {:.3g} of the coarser local surface edge ({:.3g} at the start; "
-                    "the check judges the rise)",
-                    c.surface_depth_max, c.surface_depth_relative_max,
-                    c.surface_depth_relative_start));
+        fmt::format(
+            "{:.3e} (the deepest a surface node lay behind the other surface, "
+            "geometric); {:.3g} of the coarser local surface edge{} ({:.3g} at the "
+            "start; the check judges the rise)",
+            c.surface_depth_max, c.surface_depth_relative_max,
+            c.surface_depth_where.empty()
+                ? std::string()
+                : fmt::format(", {} at t = {:.4g}", c.surface_depth_where, c.surface_depth_time),
+            c.surface_depth_relative_start));
     // Shown where the coverage barrier hides some: partly covered nodes.
     if (c.overlap_max > std::max(c.penetration_max, c.gap_violation_max))
       row("weighted overlap",

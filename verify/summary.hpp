@@ -70,6 +70,8 @@ struct ContactFigures {
   double surface_depth_max = 0.0;           // Recorder::surface_depth_max(): geometric
   double surface_depth_relative_max = 0.0;  // the same, of the edge behind which
   double surface_depth_relative_start = 0.0;  // and at the start
+  double surface_depth_time = 0.0;            // when and where the largest was
+  std::string surface_depth_where;            // "" when no node lay behind
   long contact_events = 0;
 };
 
