@@ -152,15 +152,13 @@ bool MortarContact::add_joined_surface(const std::vector<std::array<int, 2>>& ed
       return std::any_of(chain.begin(), chain.end(),
                          [&](const std::array<int, 2>& e) { return e[0] == node || e[1] == node; });
     };
-    const bool new_edges = std::any_of(edges.begin(), edges.end(), [&](const auto& e) {
-      return std::find(chain.begin(), chain.end(), e) == chain.end();
-    });
     const bool meets = std::any_of(edges.begin(), edges.end(),
                                    [&](const auto& e) { return has_node(e[0]) || has_node(e[1]); });
-    if (!new_edges || !meets) return false;
+    if (!meets) return false;
+    bool added = false;
     for (const auto& e : edges)
-      if (std::find(chain.begin(), chain.end(), e) == chain.end()) chain.push_back(e);
-    return true;
+      if (std::find(chain.begin(), chain.end(), e) == chain.end()) chain.push_back(e), added = true;
+    return added;
   };
   const bool slave = join(slave_joined_);
   const bool master = join(master_joined_);

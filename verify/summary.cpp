@@ -19,12 +19,14 @@ namespace emdae {
 
 namespace {
 
+// `lower`: the limit is a lower bound (Check::lower).
 Check make_check(const std::string& name, std::optional<double> value, double limit,
-                 const std::string& why_skipped = "not conserved by this system") {
-  Check c{name, value, limit, "skipped", ""};
-  // A NaN error must fail, hence the negated comparison.
+                 const std::string& why_skipped = "not conserved by this system",
+                 bool lower = false) {
+  Check c{name, value, limit, "skipped", "", lower};
+  // A NaN must fail, hence the negated comparisons.
   if (value)
-    c.result = !(*value <= limit) ? "fail" : "pass";
+    c.result = !(lower ? *value > limit : *value <= limit) ? "fail" : "pass";
   else
     c.note = why_skipped;
   return c;
@@ -261,12 +263,9 @@ Summary summarize(const RunInfo& info, const System& system, const Recorder& rec
                    std::max(0.0, c.surface_depth_relative_max - c.surface_depth_relative_start),
                    tolerances.surface_depth.value_or(kSurfaceDepthDefault)));
   }
-  if (s.det_f_min) {
-    Check c = make_check("det_f_min", s.det_f_min, tolerances.det_f_min.value_or(0.0));
-    c.lower = true;
-    c.result = *s.det_f_min > c.limit ? "pass" : "fail";  // NaN fails
-    s.checks.push_back(c);
-  }
+  if (s.det_f_min)
+    s.checks.push_back(
+        make_check("det_f_min", s.det_f_min, tolerances.det_f_min.value_or(0.0), "", true));
   if (tolerances.contact_pressure_spread)
     s.checks.push_back(make_check("contact_pressure_spread",
                                   max_pressure_spread(s.contact_pressure),
