@@ -237,16 +237,57 @@ void MortarContact::prepare(const Vec& q, const Vec& v, double dt) {
   std::vector<Box> master_boxes;
   master_boxes.reserve(master_.edges.size());
   for (const auto& e : master_.edges) master_boxes.push_back(box(e));
-  grid_.build(master_boxes, std::max(mean_master_length_, margin));
+
+  // Surfaces apart (their boxes' bounds do not meet, as in free flight): no
+  // slave segment's box meets a master segment's, so no node has a pair.
+  // Else only segments whose boxes meet the other surface's bounds can
+  // pair: few of them (the part of the surfaces near each other) are
+  // tested all against all, in ascending order as the grid's queries
+  // return them; many go through the bucket grid.
+  const auto bounds = [](const std::vector<Box>& boxes) {
+    Box b{Eigen::Vector2d::Constant(std::numeric_limits<double>::infinity()),
+          Eigen::Vector2d::Constant(-std::numeric_limits<double>::infinity())};
+    for (const Box& x : boxes) b = Box{b.lo.cwiseMin(x.lo), b.hi.cwiseMax(x.hi)};
+    return b;
+  };
+  std::vector<Box> slave_boxes;
+  slave_boxes.reserve(slave_.edges.size());
+  for (const auto& e : slave_.edges) slave_boxes.push_back(box(e));
+  box_tests_ = 0;
+  const Box master_bounds = bounds(master_boxes), slave_bounds = bounds(slave_boxes);
+  if (master_boxes.empty() || slave_boxes.empty() || !master_bounds.overlaps(slave_bounds)) {
+    n_pairs_ = 0;
+    for (auto& t : terms_) t.reset();
+    return;
+  }
+  std::vector<int> near_master;
+  std::vector<Box> near_boxes;
+  for (std::size_t m = 0; m < master_boxes.size(); ++m)
+    if (master_boxes[m].overlaps(slave_bounds)) {
+      near_master.push_back(static_cast<int>(m));
+      near_boxes.push_back(master_boxes[m]);
+    }
+  std::size_t near_slaves = 0;
+  for (const Box& b : slave_boxes) near_slaves += b.overlaps(master_bounds) ? 1 : 0;
+  const bool direct = near_slaves * near_master.size() <= kDirectBoxTests;
+  if (!direct) grid_.build(near_boxes, std::max(mean_master_length_, margin));
 
   // Candidate master segments of every slave segment: boxes overlap and the
   // segments face each other (tangents opposed).
   std::vector<std::vector<int>> candidates(slave_.edges.size());
   for (std::size_t e = 0; e < slave_.edges.size(); ++e) {
-    grid_.query(box(slave_.edges[e]), candidates[e]);
+    auto& c = candidates[e];
+    if (!slave_boxes[e].overlaps(master_bounds)) continue;
+    if (direct) {
+      for (std::size_t k = 0; k < near_master.size(); ++k)
+        if (near_boxes[k].overlaps(slave_boxes[e])) c.push_back(near_master[k]);
+      box_tests_ += static_cast<long>(near_master.size());
+    } else {
+      grid_.query(slave_boxes[e], c);
+      for (int& m : c) m = near_master[static_cast<std::size_t>(m)];
+    }
     const Eigen::Vector2d as =
         node_position(q, slave_.edges[e][1]) - node_position(q, slave_.edges[e][0]);
-    auto& c = candidates[e];
     c.erase(std::remove_if(c.begin(), c.end(),
                            [&](int m) {
                              const auto& me = master_.edges[static_cast<std::size_t>(m)];
@@ -256,6 +297,7 @@ void MortarContact::prepare(const Vec& q, const Vec& v, double dt) {
                            }),
             c.end());
   }
+  if (!direct) box_tests_ = grid_.tests();
 
   n_pairs_ = 0;
   for (std::size_t i = 0; i < slave_nodes_.size(); ++i) {

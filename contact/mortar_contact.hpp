@@ -88,7 +88,7 @@ class MortarContact final : public UnilateralConstraints {
   MortarGapTerm::CurrentWeight current_weight(int i, const Vec& q) const;
   /// Segment pairs found by the last prepare(), and box tests it made.
   long n_pairs() const { return n_pairs_; }
-  long n_box_tests() const { return grid_.tests(); }
+  long n_box_tests() const { return box_tests_; }
 
  private:
   /// MortarGapTerm::engaged_value of candidate i at q (global), +infinity
@@ -109,6 +109,9 @@ class MortarContact final : public UnilateralConstraints {
   std::vector<std::unique_ptr<MortarGapTerm>> terms_;
   BucketGrid grid_;
   long n_pairs_ = 0;
+  long box_tests_ = 0;  // in the last prepare(), all against all or through the grid
+  // Up to this many box tests all against all, more through the grid.
+  static constexpr std::size_t kDirectBoxTests = 1024;
 };
 
 /// The contact pressure at one active slave node A of a MortarContact. Its
