@@ -399,6 +399,17 @@ bool Q1Element::add_fixed(GradientKind kind, const Vec& q0, const Vec& q1, doubl
   return true;
 }
 
+bool Q1Element::global_value(const Vec& q, double, double& value) const {
+  const auto& d = dofs();
+  Vec8 a;
+  for (int i = 0; i < 8; ++i) a[i] = q[d[static_cast<std::size_t>(i)]];
+  value = 0.0;
+  for (int g = 0; g < kGaussPoints; ++g)
+    value +=
+        gp_[static_cast<std::size_t>(g)].weight * material_.energy(point_invariants(point_f(a, g)));
+  return true;
+}
+
 double Q1Element::area() const {
   double a = 0.0;
   for (const auto& g : gp_) a += g.weight;

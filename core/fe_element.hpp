@@ -73,6 +73,8 @@ class Q1Element final : public Term {
                       Vec& grad, Mat* jac) const override;
   bool add_fixed(GradientKind kind, const Vec& q0, const Vec& q1, double t0, double t1, double* f,
                  double* values, const long* slots, double jac_factor) const override;
+  /// value() on fixed sizes, the same operations in the same order.
+  bool global_value(const Vec& q, double t, double& value) const override;
   std::string describe() const override;
 
   const Material& material() const { return material_; }

@@ -10,7 +10,12 @@ namespace emdae {
 double potential_energy(const System& system, const Vec& q, double t) {
   double v = 0.0;
   Vec local;
+  double e = 0.0;
   for (const auto& term : system.potentials()) {
+    if (term->global_value(q, t, e)) {
+      v += e;
+      continue;
+    }
     gather(*term, q, local);
     v += term->value(local, t);
   }

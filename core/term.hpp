@@ -113,6 +113,13 @@ class Term {
                          double /*jac_factor*/) const {
     return false;
   }
+  /// f at time t with the term's positions read from the global q by its
+  /// dofs, without gathering them (potential_energy, core/quantities.cpp):
+  /// into `value`, returning true; false (the default) where the term has
+  /// no such path, and then value() of the gathered positions serves.
+  virtual bool global_value(const Vec& /*q*/, double /*t*/, double& /*value*/) const {
+    return false;
+  }
   /// True when f depends on time explicitly (driven constraints, loads).
   virtual bool depends_on_time() const { return false; }
 

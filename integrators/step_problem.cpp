@@ -158,7 +158,8 @@ void StepProblem::residual(const Vec& x, Vec& f) {
   }
   res_q1_ = q1;
   res_lambda_ = lambda;
-  f.head(n_) = (2.0 / (dt_ * dt_)) * (s_.mass() * (q1 - q0_ - dt_ * v0_)) + res_force_;
+  res_inertia_ = (2.0 / (dt_ * dt_)) * (s_.mass() * (q1 - q0_ - dt_ * v0_));
+  f.head(n_) = res_inertia_ + res_force_;
   // The system's constraints: Phi(q1) = 0. Contact rows: Phi(q0) +
   // (Phi(q1) - Phi(q0)) = target, with the increment G . (q1 - q0) for
   // the discrete gradient. Under persistency (target = Phi(q0)) the row is
@@ -527,7 +528,12 @@ Vec StepProblem::transfer(const Vec& imbalance, const Vec& q1) const {
 double StepProblem::energy_residual(const Vec& x, const Vec& f) const {
   if (k_.size() && k_.any()) return 0.0;
   const Vec dq = x.head(n_) - q0_;
-  const Vec inertia = (2.0 / (dt_ * dt_)) * (s_.mass() * (dq - dt_ * v0_));
+  // The inertia rows as the residual at x had them, where it was the last
+  // (the balance is asked for right after it), else evaluated here.
+  const bool at_last = res_f_.size() == size() && at_last_residual(x.head(n_), kappa_ * x.tail(m_));
+  Vec own;
+  if (!at_last) own = (2.0 / (dt_ * dt_)) * (s_.mass() * (dq - dt_ * v0_));
+  const Vec& inertia = at_last ? res_inertia_ : own;
   const Vec& m = s_.lumped_mass();
   // The kinetic energy at the start, on the first call (a problem that
   // only gives residuals, SubstepScheme::end_rate's, never needs it).

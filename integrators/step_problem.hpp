@@ -154,7 +154,8 @@ class StepProblem final : public NewtonProblem {
   Vec res_potential_;                               // and G_V there (res_force_'s first part)
   const Vec* known_potential_ = nullptr;            // use_potential_forces()
   Vec known_q1_;
-  Vec res_f_;  // and the residual itself (a second call at that point copies it)
+  Vec res_f_;        // and the residual itself (a second call at that point copies it)
+  Vec res_inertia_;  // and its inertia rows, 2/dt^2 M (q1 - q0 - dt v0) (energy_residual)
   /// Whether (q1, lambda) is the last residual's point.
   bool at_last_residual(const Vec& q1, const Vec& lambda) const {
     return q1.size() == res_q1_.size() && lambda.size() == res_lambda_.size() && q1 == res_q1_ &&
