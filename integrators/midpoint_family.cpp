@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -155,17 +156,22 @@ StepStats MidpointFamilyStepper::solve_substep(State& state, double dt, const Ve
   const bool predictor_accepted =
       free_flight && newton_.guess_meets_tolerance(problem, x, problem.scale());
   NewtonResult r;
+  // The structure of the factorization at hand: a mapped solve that stops at
+  // its handoff factors nothing, so the next re-solve maps from this one.
+  std::optional<SolveStructure> factored_structure;
   if (predictor_accepted) {
     r.converged = true;
     r.message = "predictor within the tolerance";
   } else {
     // A solve from the predictor whose last factored Jacobian had the same
     // active set and step length starts with a chord step (newton.hpp).
-    // A re-solve with contacts released starts with chord steps on the
-    // last factorization with their rows replaced (newton.hpp).
+    // A re-solve with contacts released or entered starts with chord steps
+    // on the last factorization with their rows replaced and the entered
+    // ones' bordering it (newton.hpp).
     std::vector<Eigen::Index> from_last;
-    const bool released = last_structure_.releases(
+    const bool changed = last_structure_.changes(
         state.active, dt, static_cast<Eigen::Index>(n + system_.n_constraints()), from_last);
+    if (changed) factored_structure = last_structure_;
     const bool same_structure = last_structure_.same_as_last(state.active, dt) && !guess;
     // The contact stepper's test of the active set where the chord steps
     // hand over to Newton's method (contact_step.hpp).
@@ -176,10 +182,11 @@ StepStats MidpointFamilyStepper::solve_substep(State& state, double dt, const Ve
         return probe_(xi.head(n), kappa * xi.tail(m), dxi.head(n), kappa * dxi.tail(m));
       };
     }
-    r = newton_.solve(problem, x, problem.scale(), same_structure, released ? &from_last : nullptr,
+    r = newton_.solve(problem, x, problem.scale(), same_structure, changed ? &from_last : nullptr,
                       probe_ ? &handoff : nullptr);
   }
   if (r.stopped_at_handoff) {
+    if (factored_structure) last_structure_ = *factored_structure;
     last_.valid = false;
     StepStats stats;
     stats.stopped_early = true;

@@ -351,33 +351,40 @@ NewtonResult NewtonSolver::solve(NewtonProblem& problem, Vec& x, const Vec& resi
     --m.chord_skip;
     chord = false;
   }
-  // A solve that releases some unknowns of the last (from_last, see the
-  // header): chord steps with the last factorization, each released
-  // unknown's row replaced by x_k = 0 (Woodbury: with E the released
-  // unknowns' unit columns, Z = J^-1 E and W = E - J^T E, (J + E W^T)^-1 b
-  // = y - Z C^-1 (W^T y), C = I + W^T Z, y = J^-1 b; one more solve per
-  // released unknown, once; for one, Sherman-Morrison). Other unknowns keep
-  // their places through the map.
-  std::vector<Eigen::Index> released;
-  Eigen::MatrixXd z_released, w_released;
-  Eigen::PartialPivLU<Eigen::MatrixXd> capacitance;
-  const Eigen::Index n_released = m.n - n;
+  // A solve whose unknowns are the last solve's but some released and some
+  // added (from_last, see the header): chord steps with the last
+  // factorization J, each released unknown's row replaced by x_k = 0
+  // (Woodbury: with E the released unknowns' unit columns, Z = J^-1 E and
+  // W = E - J^T E, A^-1 b = (J + E W^T)^-1 b = y - Z C^-1 (W^T y),
+  // C = I + W^T Z, y = J^-1 b; one more solve per released unknown, once),
+  // bordered by the added unknowns' columns B and rows R, with D their
+  // block (block elimination: [A B; R D] [y; z] = [b; c] has z = S^-1 (c -
+  // R A^-1 b), y = A^-1 b - A^-1 B z, S = D - R A^-1 B; one more solve per
+  // added unknown, once). Other unknowns keep their places through the map.
+  std::vector<Eigen::Index> released, added;  // old indices released, new indices added
+  Eigen::MatrixXd z_released, w_released, z_added, r_added;
+  Eigen::PartialPivLU<Eigen::MatrixXd> capacitance, schur;
+  bool mapped = false;
   if (!eligible && from_last && settings_.jacobian_reuse != 1 && m.factored_last_solve &&
-      n_released >= 1 && n_released <= static_cast<Eigen::Index>(SolveStructure::kMaxReleased) &&
       static_cast<int>(from_last->size()) == n && m.jac.rows() == m.n) {
     std::vector<bool> kept(static_cast<std::size_t>(m.n), false);
-    bool one_to_one = true;
-    for (const Eigen::Index i : *from_last) {
-      if (i < 0 || i >= m.n || kept[static_cast<std::size_t>(i)]) {
-        one_to_one = false;
-        break;
-      }
-      kept[static_cast<std::size_t>(i)] = true;
+    mapped = true;
+    for (int i = 0; mapped && i < n; ++i) {
+      const Eigen::Index o = (*from_last)[static_cast<std::size_t>(i)];
+      if (o < 0)
+        added.push_back(i);
+      else if (o >= m.n || kept[static_cast<std::size_t>(o)])
+        mapped = false;
+      else
+        kept[static_cast<std::size_t>(o)] = true;
     }
-    for (Eigen::Index k = 0; one_to_one && k < m.n; ++k)
+    for (Eigen::Index k = 0; mapped && k < m.n; ++k)
       if (!kept[static_cast<std::size_t>(k)]) released.push_back(k);
-    if (static_cast<Eigen::Index>(released.size()) == n_released) {
-      const Eigen::Index nr = n_released;
+    mapped = mapped && !(released.empty() && added.empty()) &&
+             released.size() <= SolveStructure::kMaxReleased &&
+             added.size() <= SolveStructure::kMaxAdded;
+    if (mapped && !released.empty()) {
+      const auto nr = static_cast<Eigen::Index>(released.size());
       w_released = Eigen::MatrixXd::Zero(m.n, nr);
       z_released.resize(m.n, nr);
       std::vector<Eigen::Index> slot(static_cast<std::size_t>(m.n), -1);
@@ -389,38 +396,73 @@ NewtonResult NewtonSolver::solve(NewtonProblem& problem, Vec& x, const Vec& resi
         for (SparseMatrix::InnerIterator it(m.jac, c); it; ++it)
           if (const Eigen::Index r = slot[static_cast<std::size_t>(it.row())]; r >= 0)
             w_released(c, r) -= it.value();
-      bool solved = true;
-      for (Eigen::Index r = 0; solved && r < nr; ++r) {
+      for (Eigen::Index r = 0; mapped && r < nr; ++r) {
         Vec e = Vec::Zero(m.n), z;
         e[released[static_cast<std::size_t>(r)]] = 1.0;
-        solved = solve_with_last_jacobian(e, z);
-        if (solved) z_released.col(r) = z;
+        mapped = solve_with_last_jacobian(e, z);
+        if (mapped) z_released.col(r) = z;
       }
-      if (solved) {
-        const Eigen::MatrixXd c =
-            Eigen::MatrixXd::Identity(nr, nr) + w_released.transpose() * z_released;
-        capacitance.compute(c);
+      if (mapped) {
+        capacitance.compute(Eigen::MatrixXd::Identity(nr, nr) +
+                            w_released.transpose() * z_released);
         // (for one: |1 + w . z| > 1e-12, as before)
-        if (!(std::abs(capacitance.determinant()) > 1e-12)) solved = false;
+        mapped = std::abs(capacitance.determinant()) > 1e-12;
       }
-      if (!solved) released.clear();
-    } else {
-      released.clear();
     }
   }
-  const bool release_chord = !released.empty();
-  // The chord direction d = -J_last^-1 f (or the released ones').
-  const auto direction = [&](const Vec& f, Vec& d) {
-    if (!release_chord) return solve_with_last_jacobian(-f, d);
-    Vec b = Vec::Zero(m.n), y;
-    for (int i = 0; i < n; ++i) b[(*from_last)[static_cast<std::size_t>(i)]] = -f[i];
+  // y = A^-1 b in the last solve's unknowns (J^-1 with the released rows
+  // replaced).
+  const auto solve_kept = [&](const Vec& b, Vec& y) {
     if (!solve_with_last_jacobian(b, y)) return false;
-    const Vec full = y - z_released * capacitance.solve(w_released.transpose() * y);
+    if (!released.empty()) y -= z_released * capacitance.solve(w_released.transpose() * y);
+    return y.allFinite();
+  };
+  if (mapped && !added.empty()) {
+    const auto na = static_cast<Eigen::Index>(added.size());
+    Eigen::MatrixXd b_added = Eigen::MatrixXd::Zero(m.n, na), d = Eigen::MatrixXd::Zero(na, na);
+    r_added = Eigen::MatrixXd::Zero(na, m.n);
+    z_added.resize(m.n, na);
+    Vec column, row, z;
+    for (Eigen::Index j = 0; mapped && j < na; ++j) {
+      mapped = problem.added_unknown(x, static_cast<int>(added[static_cast<std::size_t>(j)]),
+                                     column, row) &&
+               column.size() == n && row.size() == n;
+      if (!mapped) break;
+      for (int i = 0; i < n; ++i)
+        if (const Eigen::Index o = (*from_last)[static_cast<std::size_t>(i)]; o >= 0) {
+          b_added(o, j) = column[i];
+          r_added(j, o) = row[i];
+        }
+      for (Eigen::Index k = 0; k < na; ++k) d(k, j) = column[added[static_cast<std::size_t>(k)]];
+      mapped = solve_kept(b_added.col(j), z);
+      if (mapped) z_added.col(j) = z;
+    }
+    if (mapped) {
+      schur.compute(d - r_added * z_added);
+      mapped = schur.rcond() > 1e-12;
+    }
+  }
+  if (!mapped) released.clear(), added.clear();
+  // The chord direction d = -J_last^-1 f (or the mapped one's).
+  const auto direction = [&](const Vec& f, Vec& d) {
+    if (!mapped) return solve_with_last_jacobian(-f, d);
+    Vec b = Vec::Zero(m.n), y;
+    for (int i = 0; i < n; ++i)
+      if (const Eigen::Index o = (*from_last)[static_cast<std::size_t>(i)]; o >= 0) b[o] = -f[i];
+    if (!solve_kept(b, y)) return false;
     d.resize(n);
-    for (int i = 0; i < n; ++i) d[i] = full[(*from_last)[static_cast<std::size_t>(i)]];
+    if (!added.empty()) {
+      Vec c(static_cast<Eigen::Index>(added.size()));
+      for (std::size_t j = 0; j < added.size(); ++j) c[static_cast<Eigen::Index>(j)] = -f[added[j]];
+      const Vec z = schur.solve(c - r_added * y);
+      y -= z_added * z;
+      for (std::size_t j = 0; j < added.size(); ++j) d[added[j]] = z[static_cast<Eigen::Index>(j)];
+    }
+    for (int i = 0; i < n; ++i)
+      if (const Eigen::Index o = (*from_last)[static_cast<std::size_t>(i)]; o >= 0) d[i] = y[o];
     return d.allFinite();
   };
-  if (chord || release_chord) {
+  if (chord || mapped) {
     // Chord steps while each cuts the residual by chord_contraction, until
     // it is below chord_handoff times the tolerance: from there one Newton
     // iteration lands at round-off. (Chord steps alone to the tolerance
@@ -469,7 +511,7 @@ NewtonResult NewtonSolver::solve(NewtonProblem& problem, Vec& x, const Vec& resi
       x = std::move(xc);
       m.chord_steps += chords;
       m.chord_backoff = 1;
-    } else if (first_rejected && !release_chord) {
+    } else if (first_rejected && !mapped) {
       m.chord_skip = m.chord_backoff;
       m.chord_backoff = std::min(2 * m.chord_backoff, Impl::kMaxChordBackoff);
     }

@@ -11,6 +11,7 @@
 // the unknowns (for the mechanical steppers: length).
 #pragma once
 
+#include <algorithm>
 #include <cmath>
 #include <functional>
 #include <memory>
@@ -38,6 +39,15 @@ class NewtonProblem {
   /// relative to the step's scale of it (see NewtonSettings::
   /// angular_tolerance); 0 when the problem has no such balance.
   virtual double angular_residual(const Vec& /*x*/, const Vec& /*f*/) const { return 0.0; }
+  /// For a solve whose unknown k was not among the last solve's (a contact
+  /// just entered: NewtonSolver::solve's from_last): J's column k and row k
+  /// at x, dense, size() long, where it neglects nothing but terms weighted
+  /// by unknown k itself (its multiplier's curvature; 0 where it starts).
+  /// False (the default): the problem cannot give them, and the solve starts
+  /// without chord steps.
+  virtual bool added_unknown(const Vec& /*x*/, int /*k*/, Vec& /*column*/, Vec& /*row*/) {
+    return false;
+  }
 };
 
 struct NewtonSettings {
@@ -119,26 +129,39 @@ class SolveStructure {
     return same;
   }
   /// Whether (active, h) is the one noted last with some contacts released
-  /// (one to kMaxReleased; the same step length): then from_last maps each
-  /// unknown (n_fixed positions and velocities or positions and the
-  /// system's multipliers, then one multiplier per active contact) to its
-  /// index in the last solve's (NewtonSolver::solve's from_last). Notes
+  /// (up to kMaxReleased) or entered (up to kMaxAdded), at least one, at the
+  /// same step length: then from_last maps each unknown (n_fixed positions
+  /// and velocities or positions and the system's multipliers, then one
+  /// multiplier per active contact) to its index in the last solve's, -1
+  /// for an entered contact's (NewtonSolver::solve's from_last). Notes
   /// nothing.
   static constexpr std::size_t kMaxReleased = 4;
-  bool releases(const std::vector<int>& active, double h, Eigen::Index n_fixed,
-                std::vector<Eigen::Index>& from_last) const {
-    if (!valid_ || std::abs(h_ - h) > 1e-6 * h || active.size() >= active_.size() ||
-        active_.size() - active.size() > kMaxReleased)
-      return false;
+  static constexpr std::size_t kMaxAdded = 4;
+  bool changes(const std::vector<int>& active, double h, Eigen::Index n_fixed,
+               std::vector<Eigen::Index>& from_last) const {
+    if (!valid_ || std::abs(h_ - h) > 1e-6 * h) return false;
     from_last.resize(static_cast<std::size_t>(n_fixed) + active.size());
     for (Eigen::Index i = 0; i < n_fixed; ++i) from_last[static_cast<std::size_t>(i)] = i;
-    std::size_t j = 0;  // active is active_ without some entries, in the same order
-    for (std::size_t k = 0; k < active.size(); ++k, ++j) {
-      while (j < active_.size() && active_[j] != active[k]) ++j;
-      if (j >= active_.size()) return false;
-      from_last[static_cast<std::size_t>(n_fixed) + k] = n_fixed + static_cast<Eigen::Index>(j);
+    std::size_t kept = 0, added = 0;
+    for (std::size_t k = 0; k < active.size(); ++k) {
+      const auto it = std::find(active_.begin(), active_.end(), active[k]);
+      Eigen::Index& to = from_last[static_cast<std::size_t>(n_fixed) + k];
+      if (it == active_.end()) {
+        to = -1;
+        ++added;
+      } else {
+        to = n_fixed + static_cast<Eigen::Index>(it - active_.begin());
+        ++kept;
+      }
     }
-    return true;
+    const std::size_t released = active_.size() - kept;
+    return released + added > 0 && released <= kMaxReleased && added <= kMaxAdded;
+  }
+  /// changes() with contacts released only.
+  bool releases(const std::vector<int>& active, double h, Eigen::Index n_fixed,
+                std::vector<Eigen::Index>& from_last) const {
+    return changes(active, h, n_fixed, from_last) &&
+           std::none_of(from_last.begin(), from_last.end(), [](Eigen::Index i) { return i < 0; });
   }
   /// The next solve has no structure to share (a fresh start).
   void forget() { valid_ = false; }
@@ -179,11 +202,13 @@ class NewtonSolver {
   /// Newton's method from x. (docs/performance.md §18, §19.)
   ///
   /// `from_last`: this problem's unknowns are the last solve's but a few
-  /// (up to SolveStructure::kMaxReleased), released (contacts released,
-  /// the same step length), and from_last[i] is unknown i's index among the
-  /// last solve's. Unless jacobian_reuse is 1, the solve then starts with
+  /// released (up to SolveStructure::kMaxReleased: contacts released, the
+  /// same step length) and a few added (up to kMaxAdded: contacts entered),
+  /// and from_last[i] is unknown i's index among the last solve's, -1 for
+  /// an added one. Unless jacobian_reuse is 1, the solve then starts with
   /// the same chord steps, on the last factorization with each released
-  /// unknown's row replaced by x_k = 0.
+  /// unknown's row replaced by x_k = 0, bordered by the added unknowns'
+  /// columns and rows (NewtonProblem::added_unknown).
   ///
   /// `stop_at_handoff`: asked where those chord steps reach their handoff;
   /// where it says so the solve stops there (a contact stepper whose

@@ -181,6 +181,29 @@ void StepProblem::residual(const Vec& x, Vec& f) {
   res_f_ = f;
 }
 
+bool StepProblem::added_unknown(const Vec& x, int k, Vec& column, Vec& row) {
+  const int l = k - n_;
+  if (l < s_.n_constraints() || l >= m_ || massless_mode() || penalty_[l] > 0.0 ||
+      x.size() != size())
+    return false;
+  const Term& c = assembler_.constraint(l);
+  Vec local0, local1, g;
+  gather(c, q0_, local0);
+  gather(c, Vec(x.head(n_)), local1);
+  TermWorkspace ws;
+  const auto& dofs = c.dofs();
+  column = Vec::Zero(size());
+  row = Vec::Zero(size());
+  term_gradient(c, kind_, local0, local1, t0_, t1_, g, nullptr, ws);
+  for (std::size_t i = 0; i < dofs.size(); ++i)
+    if (!s_.is_prescribed()[static_cast<std::size_t>(dofs[i])])
+      column[dofs[i]] = kappa_ * g[static_cast<Eigen::Index>(i)];
+  term_gradient(c, GradientKind::Exact, local0, local1, t0_, t1_, g, nullptr, ws);
+  for (std::size_t i = 0; i < dofs.size(); ++i)
+    row[dofs[i]] = kappa_ * g[static_cast<Eigen::Index>(i)];
+  return true;
+}
+
 void StepProblem::penalty_laws(const Vec& q1, Vec& d, Vec& slope) const {
   // h(x) = 1/2 min(x, 0)^2, h'(x) = min(x, 0).
   d = Vec::Zero(m_);

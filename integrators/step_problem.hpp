@@ -92,6 +92,11 @@ class StepProblem final : public NewtonProblem {
   void jacobian(const Vec& x, SparseMatrix& j) override;
   double energy_residual(const Vec& x, const Vec& f) const override;
   double angular_residual(const Vec& x, const Vec& f) const override;
+  /// A contact's multiplier unknown (not a system constraint's, not a
+  /// penalty's, not in massless mode): its column, kappa times the step's
+  /// gradient of Phi on the free rows, and its row, kappa times grad Phi at
+  /// q1, as jacobian() has them.
+  bool added_unknown(const Vec& x, int k, Vec& column, Vec& row) override;
   /// Residual scale: lengths on every row (see midpoint_family.hpp).
   Vec scale() const;
 

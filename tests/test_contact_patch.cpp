@@ -19,6 +19,7 @@
 #include "core/fe_element.hpp"
 #include "core/gradient.hpp"
 #include "integrators/statics.hpp"
+#include "integrators/step_problem.hpp"
 #include "paper_scenes.hpp"
 
 namespace emdae {
@@ -121,6 +122,45 @@ TEST(ContactPatch, FiniteStrainMaterialsMissTheLinearValue) {
     ASSERT_TRUE(solve_static(*b.system, st, ss).converged);
     const double p = -st.lambda[b.system->n_constraints()] / b.contact->weight(st.active[0]);
     EXPECT_GT(std::abs(p / linear - 1.0), 4e-3) << material_model_name(model) << " p " << p;
+  }
+}
+
+// A contact entering a re-solve borders the last factorization with its
+// multiplier's column and row (NewtonProblem::added_unknown, the chord steps
+// of NewtonSolver::solve): they are the Jacobian's own, at a point away from
+// the solution with the other multipliers loaded and the entering one at 0.
+TEST(ContactPatch, AnAddedMultipliersColumnAndRowAreTheJacobians) {
+  Blocks b = stacked_blocks(5, 7, 0.02, MaterialModel::SaintVenantKirchhoff);
+  const System& s = *b.system;
+  State st = initial_state(s);
+  const double dt = 0.01;
+  st.v = Vec::LinSpaced(s.n_dofs(), -0.3, 0.2);
+  s.unilateral()[0]->prepare(st.q, st.v, dt);
+  std::vector<const Term*> extra;
+  for (int id = 0; id < s.n_unilateral(); ++id)
+    if (const Term* t = s.unilateral_term(id)) extra.push_back(t), st.active.push_back(id);
+  ASSERT_GE(extra.size(), 4u);
+  const Vec zero = Vec::Zero(s.n_dofs()), ones = Vec::Ones(s.n_dofs());
+  for (const GradientKind kind : {GradientKind::Discrete, GradientKind::Midpoint}) {
+    StepProblem problem(s, kind, st, dt, extra, Vec::Zero(static_cast<Eigen::Index>(extra.size())),
+                        zero, ones);
+    const int n = s.n_dofs(), first = n + s.n_constraints();
+    const int entering = first + 2;
+    Vec x = Vec::Zero(problem.size());
+    x.head(n) = st.q + dt * st.v + 1e-3 * Vec::LinSpaced(n, -1.0, 1.0).array().sin().matrix();
+    x.tail(problem.size() - first) = Vec::LinSpaced(problem.size() - first, 0.5, 1.5);
+    x[entering] = 0.0;
+    SparseMatrix j;
+    problem.jacobian(x, j);
+    const Eigen::MatrixXd dense(j);
+    Vec column, row;
+    ASSERT_TRUE(problem.added_unknown(x, entering, column, row));
+    const double scale = dense.cwiseAbs().maxCoeff();
+    EXPECT_LE((column - dense.col(entering)).cwiseAbs().maxCoeff(), 1e-14 * scale);
+    EXPECT_LE((row - dense.row(entering).transpose()).cwiseAbs().maxCoeff(), 1e-14 * scale);
+    EXPECT_GT(column.cwiseAbs().maxCoeff(), 1e-3 * scale);  // not an empty column
+    // Not a position and not a system constraint's multiplier.
+    EXPECT_FALSE(problem.added_unknown(x, 3, column, row));
   }
 }
 

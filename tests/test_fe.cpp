@@ -1470,39 +1470,50 @@ TEST(NewtonSolve, ASolveThatReleasesOneUnknownStartsWithChordSteps) {
 // sum_i c_k,i x_i = t_k), the next keeps only the second. SolveStructure's
 // map skips both released contacts; the solve starts with chord steps and
 // takes fewer Jacobians than without the map, to the same solution.
-TEST(NewtonSolve, ASolveThatReleasesTwoUnknownsStartsWithChordSteps) {
-  class Held : public CubicTridiagonal {
-   public:
-    std::vector<Vec> c;
-    std::vector<double> t;
-    int size() const override { return n + static_cast<int>(c.size()); }
-    void residual(const Vec& x, Vec& f) override {
-      Vec fx;
-      CubicTridiagonal::residual(x.head(n), fx);
-      f.resize(size());
-      f.head(n) = fx;
-      for (std::size_t k = 0; k < c.size(); ++k) {
-        f.head(n) += c[k] * x[n + static_cast<int>(k)];
-        f[n + static_cast<int>(k)] = c[k].dot(x.head(n)) - t[k];
+// The cubic problem held by multipliers x_n+k, rows c_k . x = t_k.
+class HeldCubic : public CubicTridiagonal {
+ public:
+  std::vector<Vec> c;
+  std::vector<double> t;
+  int size() const override { return n + static_cast<int>(c.size()); }
+  void residual(const Vec& x, Vec& f) override {
+    Vec fx;
+    CubicTridiagonal::residual(x.head(n), fx);
+    f.resize(size());
+    f.head(n) = fx;
+    for (std::size_t k = 0; k < c.size(); ++k) {
+      f.head(n) += c[k] * x[n + static_cast<int>(k)];
+      f[n + static_cast<int>(k)] = c[k].dot(x.head(n)) - t[k];
+    }
+  }
+  void jacobian(const Vec& x, SparseMatrix& j) override {
+    SparseMatrix a;
+    CubicTridiagonal::jacobian(x.head(n), a);
+    std::vector<Eigen::Triplet<double, SparseMatrix::StorageIndex>> tr;
+    for (int col = 0; col < n; ++col)
+      for (SparseMatrix::InnerIterator it(a, col); it; ++it)
+        tr.emplace_back(it.row(), col, it.value());
+    for (std::size_t k = 0; k < c.size(); ++k)
+      for (int i = 0; i < n; ++i) {
+        const int m = n + static_cast<int>(k);
+        tr.emplace_back(i, m, c[k][i]), tr.emplace_back(m, i, c[k][i]);
       }
-    }
-    void jacobian(const Vec& x, SparseMatrix& j) override {
-      SparseMatrix a;
-      CubicTridiagonal::jacobian(x.head(n), a);
-      std::vector<Eigen::Triplet<double, SparseMatrix::StorageIndex>> tr;
-      for (int col = 0; col < n; ++col)
-        for (SparseMatrix::InnerIterator it(a, col); it; ++it)
-          tr.emplace_back(it.row(), col, it.value());
-      for (std::size_t k = 0; k < c.size(); ++k)
-        for (int i = 0; i < n; ++i) {
-          const int m = n + static_cast<int>(k);
-          tr.emplace_back(i, m, c[k][i]), tr.emplace_back(m, i, c[k][i]);
-        }
-      j.resize(size(), size());
-      j.setFromTriplets(tr.begin(), tr.end());
-      j.makeCompressed();
-    }
-  };
+    j.resize(size(), size());
+    j.setFromTriplets(tr.begin(), tr.end());
+    j.makeCompressed();
+  }
+  // Multiplier k - n's column and row: c_k in both.
+  bool added_unknown(const Vec& x, int k, Vec& column, Vec& row) override {
+    column = Vec::Zero(size());
+    column.head(n) = c[static_cast<std::size_t>(k - n)];
+    row = column;
+    (void)x;
+    return true;
+  }
+};
+
+TEST(NewtonSolve, ASolveThatReleasesTwoUnknownsStartsWithChordSteps) {
+  using Held = HeldCubic;
   // The map: contacts {3, 5, 7} before, {5} now, after 40 fixed unknowns.
   SolveStructure structure;
   structure.same_as_last({3, 5, 7}, 0.01);
@@ -1546,6 +1557,73 @@ TEST(NewtonSolve, ASolveThatReleasesTwoUnknownsStartsWithChordSteps) {
       EXPECT_EQ(newton.chord_steps() - c0, 0);
   }
   EXPECT_LT(jacobians[0], jacobians[1]);
+}
+
+// Contacts entering (an added multiplier) border the last factorization
+// with the new unknowns' columns and rows (NewtonProblem::added_unknown):
+// from the solution held by c1 alone, c1 and c2 (one added), and c2 and c3
+// (c1 released, c3 added: both at once). SolveStructure's map marks the
+// added unknown -1; the solve starts with chord steps and takes fewer
+// Jacobians than without the map, to the same solution.
+TEST(NewtonSolve, ASolveThatAddsUnknownsStartsWithBorderedChordSteps) {
+  SolveStructure structure;
+  structure.same_as_last({3}, 0.01);
+  std::vector<Eigen::Index> from_last;
+  ASSERT_TRUE(structure.changes({3, 5}, 0.01, 40, from_last));
+  EXPECT_EQ(from_last[40], 40);
+  EXPECT_EQ(from_last[41], -1);
+  EXPECT_FALSE(structure.releases({3, 5}, 0.01, 40, from_last));
+  EXPECT_FALSE(structure.changes({3}, 0.01, 40, from_last));              // nothing changed
+  EXPECT_FALSE(structure.changes({1, 2, 4, 5, 6}, 0.01, 40, from_last));  // five added
+  for (const int mixed : {0, 1}) {
+    std::vector<long> jacobians;
+    for (const bool mapped : {true, false}) {
+      HeldCubic first, next;
+      first.cubic = next.cubic = 1.0;
+      const int n = first.n;
+      const std::vector<Vec> c = {Vec::LinSpaced(n, 0.2, 1.0), Vec::LinSpaced(n, 1.0, 0.3),
+                                  Vec(Vec::LinSpaced(n, 0.0, 1.0).array().square() + 0.1)};
+      const std::vector<double> t = {0.5, 0.6, 0.7};
+      first.c = {c[0]}, first.t = {t[0]};
+      std::vector<Eigen::Index> map(static_cast<std::size_t>(n) + 2);
+      for (int i = 0; i < n; ++i) map[static_cast<std::size_t>(i)] = i;
+      if (mixed) {  // c1 released, c2 kept, c3 added
+        first.c.push_back(c[1]), first.t.push_back(t[1]);
+        next.c = {c[1], c[2]}, next.t = {t[1], t[2]};
+        map[static_cast<std::size_t>(n)] = n + 1;
+      } else {  // c1 kept, c2 added
+        next.c = {c[0], c[1]}, next.t = {t[0], t[1]};
+        map[static_cast<std::size_t>(n)] = n;
+      }
+      map[static_cast<std::size_t>(n) + 1] = -1;
+      NewtonSolver newton(NewtonSettings{1e-10, 25, false});
+      Vec xf = Vec::Zero(first.size());
+      ASSERT_TRUE(newton.solve(first, xf, Vec::Ones(first.size())).converged);
+      Vec x = Vec::Zero(n + 2);
+      x.head(n) = xf.head(n);
+      x[n] = xf[mixed ? n + 1 : n];
+      const long c0 = newton.chord_steps();
+      const NewtonResult r =
+          newton.solve(next, x, Vec::Ones(n + 2), false, mapped ? &map : nullptr);
+      ASSERT_TRUE(r.converged) << r.message;
+      jacobians.push_back(next.jacobians);
+      Vec f;
+      next.residual(x, f);
+      EXPECT_LE(f.cwiseAbs().maxCoeff(), 1e-10);
+      Vec x_direct = Vec::Zero(n + 2);  // the same problem from zero, by Newton's method
+      NewtonSolver fresh(NewtonSettings{1e-12, 25, false});
+      ASSERT_TRUE(fresh.solve(next, x_direct, Vec::Ones(n + 2)).converged);
+      EXPECT_LE((x - x_direct).cwiseAbs().maxCoeff(), 1e-9);
+      std::printf("%s, %s: %ld chord steps, %ld Jacobians after the change\n",
+                  mixed ? "released and added" : "added", mapped ? "mapped" : "without the map",
+                  newton.chord_steps() - c0, jacobians.back());
+      if (mapped)
+        EXPECT_GE(newton.chord_steps() - c0, 2);
+      else
+        EXPECT_EQ(newton.chord_steps() - c0, 0);
+    }
+    EXPECT_LT(jacobians[0], jacobians[1]) << mixed;
+  }
 }
 
 // Auto chooses by fill, not by size: with the threshold at 5e3 estimated
