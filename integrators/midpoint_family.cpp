@@ -212,12 +212,20 @@ StepStats MidpointFamilyStepper::solve_substep(State& state, double dt, const Ve
   if (!r.converged) return stats;
 
   const Vec q1 = x.head(n);
-  Vec v1, force, load;
-  problem.forces(q1, x.tail(m), force, load);
-  velocity_from_momentum_balance(state, q1, force, load, dt, v1, stats.external_work);
-  // The accepted predictor: (q1 - q0)/h = v0 exactly (formed from the
-  // difference, v1 would carry its cancellation, eps |q| / |q1 - q0|).
-  if (predictor_accepted) v1 = state.v;
+  Vec v1;
+  if (predictor_accepted) {
+    // (q1 - q0)/h = v0 exactly (formed from the difference, v1 would carry
+    // its cancellation, eps |q| / |q1 - q0|); free flight has no loads and
+    // no supports: no external work or impulse.
+    v1 = state.v;
+    stats.external_work = 0.0;
+    external_impulse_ = Vec::Zero(system_.dim());
+    external_angular_impulse_ = Vec::Zero(system_.dim() == 2 ? 1 : 3);
+  } else {
+    Vec force, load;
+    problem.forces(q1, x.tail(m), force, load);
+    velocity_from_momentum_balance(state, q1, force, load, dt, v1, stats.external_work);
+  }
   stats.constraint_work = driven_work(state.q, q1, x.tail(m), state.t, state.t + dt);
   stats.external_impulse = external_impulse_;
   stats.external_angular_impulse = external_angular_impulse_;
