@@ -1,9 +1,11 @@
 #include "verify/history.hpp"
 
+#include <fmt/format.h>
 #include <unistd.h>
 
 #include <cerrno>
 #include <cstring>
+#include <iterator>
 #include <stdexcept>
 
 namespace emdae {
@@ -78,11 +80,14 @@ void HistoryWriter::write(const Sample& s) {
   if (!file_) throw std::logic_error("HistoryWriter::write after close");
   history_row(s, dim_, external_work_, contact_, row_);
   // %.17g: every double read back exactly; the counts print as integers.
+  // (fmt's {:.17g} writes the same characters as printf's %.17g, at a
+  // fraction of its cost.)
+  fmt::memory_buffer line;
   for (std::size_t i = 0; i < row_.size(); ++i)
-    std::fprintf(file_, i ? ",%.17g" : "%.17g", row_[i]);
-  std::fputc('\n', file_);
+    fmt::format_to(std::back_inserter(line), i ? ",{:.17g}" : "{:.17g}", row_[i]);
+  line.push_back('\n');
   // Flushed per row: a killed run keeps its history up to the last step.
-  if (std::fflush(file_) != 0)
+  if (std::fwrite(line.data(), 1, line.size(), file_) != line.size() || std::fflush(file_) != 0)
     throw std::runtime_error("cannot write history '" + path_ + "': " + std::strerror(errno));
   ++rows_;
 }
