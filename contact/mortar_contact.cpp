@@ -7,6 +7,7 @@
 #include <map>
 #include <stdexcept>
 
+#include "core/fe_element.hpp"
 #include "core/gradient.hpp"
 
 namespace emdae {
@@ -26,6 +27,8 @@ Eigen::Vector2d node_position(const Vec& q, int node) {
 // it from there.
 struct Behind {
   double depth = 0.0, edge = 0.0;
+  std::size_t index = 0;              // the nearest edge
+  Eigen::Vector2d closest{0.0, 0.0};  // the nearest point of the chain
 };
 
 Behind depth_behind(const std::vector<std::array<int, 2>>& edges, const Vec& q,
@@ -52,7 +55,7 @@ Behind depth_behind(const std::vector<std::array<int, 2>>& edges, const Vec& q,
   if (best_t > 0.0 && best_t < 1.0) {
     const Eigen::Vector2d a = node_position(q, edge[0]);
     if ((p - a).dot(outward(best_edge)) >= 0.0) return {};
-    return {std::sqrt(best), along(best_edge).norm()};
+    return {std::sqrt(best), along(best_edge).norm(), best_edge, a + best_t * along(best_edge)};
   }
   // The nearest point is a vertex: its two edges' outward normals summed.
   const int vertex = best_t <= 0.0 ? edge[0] : edge[1];
@@ -64,7 +67,7 @@ Behind depth_behind(const std::vector<std::array<int, 2>>& edges, const Vec& q,
       normal += outward(e), length += along(e).norm(), ++sharing;
   if (sharing < 2) return {};  // an open end: not decided
   if ((p - node_position(q, vertex)).dot(normal) >= 0.0) return {};
-  return {std::sqrt(best), length / sharing};
+  return {std::sqrt(best), length / sharing, best_edge, node_position(q, vertex)};
 }
 
 // The longest edge of `edges` at each of its nodes, at q.
@@ -90,7 +93,90 @@ Eigen::AlignedBox2d chain_box(const std::vector<std::array<int, 2>>& edges, cons
   return box;
 }
 
+// 2D cross product.
+double cross(const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
+  return a.x() * b.y() - a.y() * b.x();
+}
+
+// Whether p lies in the quadrilateral of the four nodes at q, on its
+// boundary included (to a relative 1e-9 of its edges, round-off): on one
+// side of all four edges (the element is convex unless a corner folded,
+// which det_f_min reports).
+bool in_quad(const Vec& q, const std::array<int, 4>& quad, const Eigen::Vector2d& p) {
+  std::array<Eigen::Vector2d, 4> c;
+  for (std::size_t k = 0; k < 4; ++k) c[k] = node_position(q, quad[k]);
+  const double area = cross(c[2] - c[0], c[3] - c[1]);  // twice the signed area
+  if (area == 0.0) return false;
+  const double orientation = area > 0.0 ? 1.0 : -1.0;
+  for (std::size_t k = 0; k < 4; ++k) {
+    const Eigen::Vector2d d = c[(k + 1) % 4] - c[k];
+    // The distance of p from the edge's line, on the inside positive.
+    if (orientation * cross(d, p - c[k]) < -1e-9 * d.squaredNorm()) return false;
+  }
+  return true;
+}
+
+// One quadratic a t^2 + b t + c = 0: its real roots in [0, 1].
+int roots_in_unit(double a, double b, double c, std::array<double, 2>& out) {
+  int n = 0;
+  const auto keep = [&](double t) {
+    if (t >= 0.0 && t <= 1.0) out[static_cast<std::size_t>(n++)] = t;
+  };
+  const double scale = std::abs(a) + std::abs(b) + std::abs(c);
+  if (scale == 0.0) return 0;
+  if (std::abs(a) <= 1e-12 * scale) {
+    if (b != 0.0) keep(-c / b);
+    return n;
+  }
+  const double disc = b * b - 4.0 * a * c;
+  if (disc < 0.0) return 0;
+  // The stable pair: no cancellation in either root.
+  const double qq = -0.5 * (b + std::copysign(std::sqrt(disc), b));
+  const double r1 = qq / a, r2 = qq != 0.0 ? c / qq : r1;
+  keep(std::min(r1, r2));
+  if (r2 != r1) keep(std::max(r1, r2));
+  return n;
+}
+
 }  // namespace
+
+double MortarContact::BodyElements::outside(const Vec& q, const Eigen::Vector2d& p,
+                                            const Eigen::Vector2d& inward,
+                                            const std::array<int, 2>& near, int own) const {
+  const auto has = [](const std::array<int, 4>& quad, int node) {
+    return std::find(quad.begin(), quad.end(), node) != quad.end();
+  };
+  for (int node : near)
+    if (auto it = at_node.find(node); it != at_node.end())
+      for (int k : it->second) {
+        const auto& quad = quads[static_cast<std::size_t>(k)];
+        if (!has(quad, own) && in_quad(q, quad, p)) return 0.0;
+      }
+  // Deeper than the elements at the surface, or outside: all of them, the
+  // nearest's distance kept (by its edges) where p is in none.
+  double nearest = std::numeric_limits<double>::infinity();
+  Eigen::Vector2d point = p;
+  for (const auto& quad : quads) {
+    if (has(quad, own)) continue;
+    Eigen::AlignedBox2d box;
+    for (int node : quad) box.extend(node_position(q, node));
+    const double reach = box.exteriorDistance(p);
+    if (reach >= nearest) continue;
+    if (reach <= 1e-9 * box.diagonal().norm() && in_quad(q, quad, p)) return 0.0;
+    for (std::size_t k = 0; k < 4; ++k) {
+      const Eigen::Vector2d a = node_position(q, quad[k]),
+                            d = node_position(q, quad[(k + 1) % 4]) - a;
+      const double dd = d.squaredNorm();
+      const double t = dd > 0.0 ? std::clamp((p - a).dot(d) / dd, 0.0, 1.0) : 0.0;
+      const double distance = (a + t * d - p).norm();
+      if (distance < nearest) nearest = distance, point = a + t * d;
+    }
+  }
+  // Past the body along `inward`: through its far side. A node beside it
+  // (behind a face's line near a corner whose other face leans in, outside
+  // that face) is away from it across `inward`.
+  return std::max(0.0, (p - point).dot(inward));
+}
 
 MortarContact::MortarContact(const System& system, ContactSurface slave, ContactSurface master,
                              std::string name, ContactOptions options)
@@ -144,6 +230,43 @@ MortarContact::MortarContact(const System& system, ContactSurface slave, Contact
         master_nodes_.push_back(node);
   slave_joined_ = slave_.edges;
   master_joined_ = master_.edges;
+  // Each surface's body: the Q1 elements connected to its nodes through
+  // shared nodes.
+  std::vector<std::array<int, 4>> quads;
+  std::unordered_map<int, std::vector<int>> quads_at;
+  for (const auto& term : system.potentials())
+    if (const auto* e = dynamic_cast<const Q1Element*>(term.get())) {
+      const auto& dofs = e->dofs();
+      std::array<int, 4> quad{};
+      for (std::size_t k = 0; k < 4; ++k) quad[k] = dofs[2 * k] / 2;
+      for (int node : quad) quads_at[node].push_back(static_cast<int>(quads.size()));
+      quads.push_back(quad);
+    }
+  const auto body_of = [&](const ContactSurface& surface) {
+    BodyElements body;
+    std::vector<char> taken(quads.size(), 0);
+    std::vector<int> front;
+    for (const auto& e : surface.edges) front.insert(front.end(), e.begin(), e.end());
+    std::unordered_map<int, char> seen;
+    while (!front.empty()) {
+      const int node = front.back();
+      front.pop_back();
+      if (seen[node]++) continue;
+      const auto it = quads_at.find(node);
+      if (it == quads_at.end()) continue;
+      for (int k : it->second) {
+        if (taken[static_cast<std::size_t>(k)]) continue;
+        taken[static_cast<std::size_t>(k)] = 1;
+        const auto& quad = quads[static_cast<std::size_t>(k)];
+        for (int n : quad) body.at_node[n].push_back(static_cast<int>(body.quads.size()));
+        body.quads.push_back(quad);
+        front.insert(front.end(), quad.begin(), quad.end());
+      }
+    }
+    return body;
+  };
+  slave_body_ = body_of(slave_);
+  master_body_ = body_of(master_);
 }
 
 bool MortarContact::add_joined_surface(const std::vector<std::array<int, 2>>& edges) {
@@ -171,21 +294,132 @@ SurfaceDepth MortarContact::surface_depth(const Vec& q) const {
   // cuts into a fine face by a fraction of its own edges, not the face's).
   SurfaceDepth deepest;
   const auto measure = [&](const std::vector<int>& nodes, const ContactSurface& own,
-                           const std::vector<std::array<int, 2>>& other) {
+                           const std::vector<std::array<int, 2>>& other,
+                           const BodyElements& other_body) {
     const Eigen::AlignedBox2d box = chain_box(other, q);
     std::map<int, double> own_edge;
     for (int node : nodes) {
-      const Behind b = depth_behind(other, q, node_position(q, node), box);
+      const Eigen::Vector2d p = node_position(q, node);
+      const Behind b = depth_behind(other, q, p, box);
       if (!(b.depth > 0.0)) continue;
       if (own_edge.empty()) own_edge = longest_edge_at(own.edges, q);
       const double h = std::max(b.edge, own_edge[node]);
       deepest.depth = std::max(deepest.depth, b.depth);
       const double relative = h > 0.0 ? b.depth / h : 0.0;
       if (relative > deepest.relative) deepest.relative = relative, deepest.node = node;
+      // Behind the surface but in none of the body's elements: through it,
+      // by its distance to them (at most its depth).
+      if (relative > deepest.through && !other_body.quads.empty()) {
+        const Eigen::Vector2d inward = (p - b.closest).normalized();
+        const double out =
+            h > 0.0 ? other_body.outside(q, p, inward, other[b.index], node) / h : 0.0;
+        if (out > deepest.through) deepest.through = out, deepest.through_node = node;
+      }
     }
   };
-  measure(slave_nodes_, slave_, master_joined_);
-  measure(master_nodes_, master_, slave_joined_);
+  measure(slave_nodes_, slave_, master_joined_, master_body_);
+  measure(master_nodes_, master_, slave_joined_, slave_body_);
+  return deepest;
+}
+
+SweptDepth MortarContact::swept_depth(const Vec& q0, const Vec& q1) const {
+  SweptDepth deepest;
+  struct Crossing {
+    double t;
+    std::size_t edge;
+    bool in;
+  };
+  std::vector<Crossing> crossings;
+  std::vector<Eigen::AlignedBox2d> boxes;
+  const auto measure = [&](const std::vector<int>& nodes, const ContactSurface& own,
+                           const std::vector<std::array<int, 2>>& other,
+                           const BodyElements& other_body) {
+    // Only paths that meet the box the other chain swept can cross it, and
+    // only the edges whose own swept box they meet.
+    Eigen::AlignedBox2d swept;
+    boxes.resize(other.size());
+    for (std::size_t e = 0; e < other.size(); ++e) {
+      Eigen::AlignedBox2d& box = boxes[e];
+      box.setEmpty();
+      for (int node : other[e])
+        box.extend(node_position(q0, node)), box.extend(node_position(q1, node));
+      swept.extend(box);
+    }
+    // The node's own longest surface edge at q1 (a chain: at most two).
+    const auto own_edge = [&](int node) {
+      double longest = 0.0;
+      for (const auto& e : own.edges)
+        if (e[0] == node || e[1] == node)
+          longest = std::max(longest, (node_position(q1, e[1]) - node_position(q1, e[0])).norm());
+      return longest;
+    };
+    for (int node : nodes) {
+      const Eigen::Vector2d p0 = node_position(q0, node), dp = node_position(q1, node) - p0;
+      Eigen::AlignedBox2d path(p0);
+      path.extend(p0 + dp);
+      if (!path.intersects(swept)) continue;
+      crossings.clear();
+      for (std::size_t e = 0; e < other.size(); ++e) {
+        if (!boxes[e].intersects(path)) continue;
+        const Eigen::Vector2d a0 = node_position(q0, other[e][0]),
+                              b0 = node_position(q0, other[e][1]);
+        const Eigen::Vector2d a1 = node_position(q1, other[e][0]),
+                              b1 = node_position(q1, other[e][1]);
+        // d(t) = b - a, r(t) = p - a, each linear in t; behind the edge
+        // (the body on its left) where s(t) = d x r > 0, a quadratic.
+        const Eigen::Vector2d d0 = b0 - a0, dd = (b1 - a1) - d0;
+        const Eigen::Vector2d r0 = p0 - a0, dr = dp - (a1 - a0);
+        const double c = cross(d0, r0), b = cross(d0, dr) + cross(dd, r0), a = cross(dd, dr);
+        std::array<double, 2> t{};
+        const int n = roots_in_unit(a, b, c, t);
+        for (int k = 0; k < n; ++k) {
+          const double tk = t[static_cast<std::size_t>(k)];
+          const double slope = b + 2.0 * a * tk;
+          if (slope == 0.0) continue;  // touching, not crossing
+          const Eigen::Vector2d d = d0 + tk * dd, r = r0 + tk * dr;
+          const double u = r.dot(d) / d.squaredNorm();
+          if (u >= 0.0 && u <= 1.0) crossings.push_back({tk, e, slope > 0.0});
+        }
+      }
+      if (crossings.empty()) continue;
+      std::sort(crossings.begin(), crossings.end(),
+                [](const Crossing& x, const Crossing& y) { return x.t < y.t; });
+      for (std::size_t k = 0; k < crossings.size(); ++k) {
+        if (!crossings[k].in) continue;
+        double t_out = 1.0;
+        for (std::size_t j = k + 1; j < crossings.size(); ++j)
+          if (!crossings[j].in && crossings[j].t > crossings[k].t) {
+            t_out = crossings[j].t;
+            break;
+          }
+        const auto& edge = other[crossings[k].edge];
+        const auto at = [&](int n, double t) {
+          return Eigen::Vector2d((1.0 - t) * node_position(q0, n) + t * node_position(q1, n));
+        };
+        const Eigen::Vector2d a = at(edge[0], t_out), d = at(edge[1], t_out) - a;
+        const double length = d.norm();
+        if (!(length > 0.0)) continue;
+        const double depth = cross(d, p0 + t_out * dp - a) / length;
+        if (!(depth > 0.0)) continue;
+        const double h = std::max(length, own_edge(node));
+        const double relative = depth / h;
+        deepest.depth = std::max(deepest.depth, depth);
+        if (relative > deepest.relative) deepest.relative = relative, deepest.node = node;
+        // Still behind at the step's end and outside the body: through it,
+        // by its distance to the body, at most its depth behind the edge
+        // (a node that slid off the edge's end within the step is outside
+        // the body by the slide, behind the edge's line by round-off).
+        if (t_out == 1.0 && relative > deepest.through && !other_body.quads.empty()) {
+          const Eigen::Vector2d inward = Eigen::Vector2d(-d.y(), d.x()) / length;
+          const double out =
+              std::min(depth, other_body.outside(q1, p0 + dp, inward, edge, node)) / h;
+          if (out > deepest.through) deepest.through = out, deepest.through_node = node;
+        }
+      }
+    }
+  };
+  measure(slave_nodes_, slave_, master_joined_, master_body_);
+  measure(master_nodes_, master_, slave_joined_, slave_body_);
   return deepest;
 }
 

@@ -6,6 +6,7 @@
 #include <array>
 #include <memory>
 #include <string>
+#include <unordered_map>
 #include <vector>
 
 #include "contact/mortar.hpp"
@@ -63,7 +64,18 @@ class MortarContact final : public UnilateralConstraints {
   /// its two edges' outward normals); at a chain's open end it is not
   /// decided (counted as outside). Returns the largest such distance.
   /// Each chain is taken with the surfaces joined to it (add_joined_surface).
+  /// A node behind the other chain that lies in none of the other body's
+  /// elements (the Q1 elements connected to its surface, in the current
+  /// configuration) has gone through that body: SurfaceDepth::through is
+  /// how far past the nearest of them it lies along the direction of its
+  /// depth (from its closest point on the surface), of the coarser mesh.
   SurfaceDepth surface_depth(const Vec& q) const override;
+  /// The straight paths of each slave node against the moving master chain
+  /// and of each master node against the slave chain (every position linear
+  /// in time over the step): where a path crosses an edge from in front to
+  /// behind, its depth behind that edge's line when the path next crosses
+  /// out of the chain, or at q1. Relative as surface_depth's.
+  SweptDepth swept_depth(const Vec& q0, const Vec& q1) const override;
   /// Another contact surface's edges: where they share a node with the
   /// slave or the master chain, or with what was joined to it before, they
   /// join that chain for surface_depth. A block's side declared as a slave
@@ -103,6 +115,22 @@ class MortarContact final : public UnilateralConstraints {
   // The chains surface_depth() measures against: the own edges and those
   // of joined surfaces (add_joined_surface).
   std::vector<std::array<int, 2>> slave_joined_, master_joined_;
+  // The Q1 elements (corner nodes, in order) of the body each surface lies
+  // on, and those at each of its nodes: a node behind the other surface
+  // and outside all of them went through it, by how far past the nearest
+  // it lies along its depth's direction. Empty: not an FE body.
+  struct BodyElements {
+    std::vector<std::array<int, 4>> quads;
+    std::unordered_map<int, std::vector<int>> at_node;
+    /// How far p lies past the quads at q along the unit vector `inward`
+    /// (into the body through the surface it lies behind): 0 in one of them
+    /// (on its boundary counts; those at `near` are tried first), else its
+    /// offset from the nearest point of the nearest quad, along `inward`,
+    /// or 0. Quads with `own` as a corner do not count.
+    double outside(const Vec& q, const Eigen::Vector2d& p, const Eigen::Vector2d& inward,
+                   const std::array<int, 2>& near, int own) const;
+  };
+  BodyElements slave_body_, master_body_;
   std::vector<std::array<int, 2>> node_edges_;  // slave edges at each slave node (-1: none)
   std::vector<double> weights_;
   double mean_master_length_ = 0.0;

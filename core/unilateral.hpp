@@ -26,6 +26,27 @@ struct SurfaceDepth {
   double depth = 0.0;     // a distance
   double relative = 0.0;  // a fraction of the local edge length (the coarser side's)
   int node = -1;          // the system node of the largest relative depth; -1: none
+  // Of the nodes behind the other surface, those inside none of the other
+  // body's elements: they went through it (past its far side). The largest
+  // distance of such a node to the nearest of those elements, as a fraction
+  // of the coarser mesh as `relative`, and its node; 0 / -1 when none did
+  // (or when the other surface is no FE body's).
+  double through = 0.0;
+  int through_node = -1;
+};
+
+/// How deep a surface node's straight path within one step went behind a
+/// surface edge it crossed (UnilateralConstraints::swept_depth).
+struct SweptDepth {
+  double depth = 0.0;     // a distance
+  double relative = 0.0;  // a fraction of the coarser mesh, as SurfaceDepth::relative
+  int node = -1;          // the system node of the largest relative depth; -1: none
+  // Paths that crossed in, stayed behind the crossed edge to the step's end
+  // and ended in none of the other body's elements: through it, by their
+  // distance to them (as SurfaceDepth::through, where the step end's
+  // closest point may miss it: beyond the band it looks in).
+  double through = 0.0;
+  int through_node = -1;
 };
 
 class UnilateralConstraints {
@@ -56,6 +77,13 @@ class UnilateralConstraints {
   /// longest surface edge); both maxima over the nodes, zero when none is or
   /// when the set has no surfaces.
   virtual SurfaceDepth surface_depth(const Vec& /*q*/) const { return {}; }
+  /// Over one step from q0 to q1, every position moving on a straight line:
+  /// for each time a surface node's path crossed into the other side's
+  /// surface (from in front of an edge to behind it, within the edge), how
+  /// deep behind that edge it was when its path next left the surface, or
+  /// at q1 when it did not. Large where a body passed through the other
+  /// between two step ends (tunnelling), which the step ends alone miss.
+  virtual SweptDepth swept_depth(const Vec& /*q0*/, const Vec& /*q1*/) const { return {}; }
   /// Describes candidate i for messages ("slave node 17 of ring_a").
   virtual std::string describe(int i) const = 0;
   /// Penalty stiffness k_i of candidate i, or 0 (the default) for an exact
