@@ -372,8 +372,10 @@ RunResult::End integrate_model(const std::function<std::unique_ptr<Stepper>()>& 
 // 2: with the trajectories' place; 3: with the driver's last-resort steps;
 // 4: with the linear solver's counters; 5: with its pivot-fill switches;
 // 6: with the scene's content and a checksum of the whole file; 7: with the
-// recorder's weighted overlap; 8: with its surface depth.
-constexpr const char* kCheckpointMagic = "emdae checkpoint 9";
+// recorder's weighted overlap; 8: with its surface depth; 9: with det F and
+// where the surface depth was; 10: with the nodes through the other body and
+// the swept depth (and the positions the next step's path starts from).
+constexpr const char* kCheckpointMagic = "emdae checkpoint 10";
 
 // What a checkpoint holds besides the recorder: the loop, the state, where
 // the history and the fields are.

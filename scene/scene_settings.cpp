@@ -285,7 +285,8 @@ void Builder::parse_output(const Fields& f) {
 void Builder::parse_tolerances(const Fields& f) {
   f.only({"energy_rel", "energy_balance_rel", "linear_momentum", "angular_momentum_rel",
           "angular_momentum_balance_rel", "constraint", "gap_violation", "penetration",
-          "contact_pressure_spread", "surface_depth", "det_f_min"});
+          "contact_pressure_spread", "surface_depth", "surface_through", "swept_depth",
+          "det_f_min"});
   // A static analysis has no time history whose energy or momenta could drift.
   if (settings().static_only)
     for (const char* k : {"energy_rel", "energy_balance_rel", "linear_momentum",
@@ -311,6 +312,17 @@ void Builder::parse_tolerances(const Fields& f) {
     f.fail_key("surface_depth",
                "the scene has no [[contacts]] whose surfaces could be checked, received " +
                    show(*f.find("surface_depth")));
+  for (const char* k : {"surface_through", "swept_depth"}) {
+    auto& limit = std::string(k) == "swept_depth" ? t.swept_depth : t.surface_through;
+    limit = f.optional_positive(k);
+    if (limit && model().contacts().empty())
+      f.fail_key(k, "the scene has no [[contacts]] whose surfaces could be checked, received " +
+                        show(*f.find(k)));
+  }
+  if (t.swept_depth && settings().static_only)
+    f.fail_key("swept_depth",
+               "a static analysis (no [time]) has no steps whose paths could be swept, received " +
+                   show(*f.find("swept_depth")));
   t.det_f_min = f.optional_number("det_f_min");
   if (t.det_f_min && model().bodies().empty())
     f.fail_key("det_f_min",

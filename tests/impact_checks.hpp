@@ -52,13 +52,14 @@ inline std::string figures_line(const Summary& s) {
   const ContactFigures c = s.contact.value_or(ContactFigures{});
   std::snprintf(line, sizeof line,
                 "energy %.2e | L %.2e J %.2e | L bal %.2e J bal %.2e | gap %.2e pen %.2e | "
-                "depth %.3f detF %.3f | active max %d events %ld | steps %ld newton %ld "
-                "cutbacks %ld | cpu %.2f s",
+                "depth %.3f through %.3f swept %.3f detF %.3f | active max %d events %ld | "
+                "steps %ld newton %ld cutbacks %ld | cpu %.2f s",
                 s.energy_rel_error_max, s.linear_momentum_error_max.value_or(-1),
                 s.angular_momentum_rel_error_max.value_or(-1),
                 s.linear_momentum_balance_error_max.value_or(-1),
                 s.angular_momentum_balance_rel_error_max.value_or(-1), c.gap_violation_max,
                 c.penetration_max, c.surface_depth_relative_max - c.surface_depth_relative_start,
+                c.surface_through_max - c.surface_through_start, c.swept_depth_relative_max,
                 s.det_f_min.value_or(1.0), c.active_contacts_max, c.contact_events, s.steps,
                 s.newton_iterations, s.cutbacks, s.cpu_seconds);
   return line;
@@ -117,6 +118,12 @@ inline ImpactVerdict judge_impact(const Summary& s, double newton_tolerance, con
     bound("surface depth beyond the start, of an edge",
           s.contact->surface_depth_relative_max - s.contact->surface_depth_relative_start,
           kSurfaceDepthDefault);
+    // A node behind the other surface and in none of its body's elements
+    // (through it), and a path through it within one step.
+    bound("surface through beyond the start, of an edge",
+          s.contact->surface_through_max - s.contact->surface_through_start,
+          kSurfaceThroughDefault);
+    bound("swept depth, of an edge", s.contact->swept_depth_relative_max, kSweptDepthDefault);
   }
   // An element folded over at a corner (its Gauss points upright).
   if (s.det_f_min && !(*s.det_f_min > 0.0)) {

@@ -31,6 +31,7 @@
 #include "integrators/schemes.hpp"
 #include "paper_scenes.hpp"
 #include "run/run.hpp"
+#include "verify/summary.hpp"
 
 namespace emdae {
 namespace {
@@ -946,4 +947,179 @@ TEST(ImpactLocation, TheSubstepAfterAnImpactStartsFromTheWholeTrial) {
 }
 
 }  // namespace
+}  // namespace emdae
+
+// --- nodes through the other body, paths through it within a step ----------
+
+namespace emdae {
+namespace {
+
+// A coarse square (one element, 0.6) above a thin plate (0.05 thick, edges
+// 0.1), the square's bottom a slave of the plate's top: the outside test's
+// coarse corner through a thin plate (2026-11-28), where the depth as a
+// fraction of the coarser mesh (the square's 0.6 edge) stays small however
+// far through the plate the corner goes.
+struct SquareOnPlate {
+  std::unique_ptr<Model> model;
+  const MortarContact* contact = nullptr;
+  int corner = -1;             // the square's bottom-left node
+  std::vector<int> square;     // the square's nodes
+  std::vector<int> plate_top;  // the plate's top nodes
+};
+
+SquareOnPlate square_on_plate() {
+  SquareOnPlate b;
+  b.model = std::make_unique<Model>(2);
+  Model& m = *b.model;
+  const Material mat = make_material(MaterialModel::SaintVenantKirchhoff, 100.0, 0.3, 1.0);
+  m.add_body("plate", rectangle_mesh({-1.0, 0.0}, 2.0, 0.05, 20, 1), mat);
+  m.add_body("square", rectangle_mesh({-0.3, 0.1}, 0.6, 0.6, 1, 1), mat);
+  b.contact = mortar(m, add_mortar_contact(m, "square.bottom", "plate.top", "corner"));
+  b.square = m.nodes("square.bottom");
+  for (int n : m.nodes("square.top")) b.square.push_back(n);
+  const Vec& x = m.system().initial_positions();
+  for (int n : m.nodes("square.bottom"))
+    if (b.corner < 0 || x[2 * n] < x[2 * b.corner]) b.corner = n;
+  b.plate_top = m.nodes("plate.top");
+  return b;
+}
+
+}  // namespace
+
+TEST(MortarContact, ANodeBehindTheSurfaceAndInNoneOfTheBodysElementsWentThrough) {
+  SquareOnPlate b = square_on_plate();
+  Vec q = b.model->system().initial_positions();
+  const auto at = [&](double x, double y) {
+    q.segment<2>(2 * b.corner) = Eigen::Vector2d(x, y);
+    return b.contact->surface_depth(q);
+  };
+  // The square's own edges at the corner, once moved: the coarser mesh.
+  const auto own = [&] {
+    const int right = b.model->nodes("square.bottom").front() == b.corner
+                          ? b.model->nodes("square.bottom").back()
+                          : b.model->nodes("square.bottom").front();
+    return (q.segment<2>(2 * right) - q.segment<2>(2 * b.corner)).norm();
+  };
+  // In front of the plate: nothing.
+  EXPECT_EQ(at(-0.3, 0.06).depth, 0.0);
+  EXPECT_EQ(at(-0.3, 0.06).through, 0.0);
+  // Into the plate, 0.02 deep: behind its top, inside an element, not through.
+  SurfaceDepth d = at(-0.25, 0.03);
+  EXPECT_NEAR(d.depth, 0.02, 1e-15);
+  EXPECT_EQ(d.through, 0.0);
+  EXPECT_EQ(d.through_node, -1);
+  // A near miss: on the plate's bottom face (0.05 deep), and just above it.
+  EXPECT_EQ(at(-0.25, 0.0).through, 0.0);
+  EXPECT_EQ(at(-0.25, 1e-7).through, 0.0);
+  // 0.02 past the bottom face: through, by that distance (0.07 behind the
+  // top), both of the coarser (the square's) edge.
+  d = at(-0.25, -0.02);
+  EXPECT_NEAR(d.depth, 0.07, 1e-15);
+  EXPECT_NEAR(d.relative, 0.07 / own(), 1e-15);
+  EXPECT_NEAR(d.through, 0.02 / own(), 1e-15);
+  EXPECT_EQ(d.through_node, b.corner);
+  EXPECT_GT(d.through, kSurfaceThroughDefault);
+  // Just past it (1e-6): through, by 1e-6.
+  d = at(-0.25, -1e-6);
+  EXPECT_NEAR(d.through, 1e-6 / own(), 1e-12);
+  // The square moved beside the plate's open end, its corner as low: not
+  // behind (nearest the open end), not through.
+  q = b.model->system().initial_positions();
+  for (int n : b.square) q.segment<2>(2 * n) += Eigen::Vector2d(1.35, -0.12);
+  ASSERT_NEAR(q[2 * b.corner], 1.05, 1e-15);
+  EXPECT_EQ(b.contact->surface_depth(q).depth, 0.0);
+  EXPECT_EQ(b.contact->surface_depth(q).through, 0.0);
+  // Deep inside a thick body (a node behind the square's bottom, 0.3 in):
+  // inside the square's element, not through.
+  q = b.model->system().initial_positions();
+  const int top = b.plate_top[b.plate_top.size() / 2];
+  q.segment<2>(2 * top) = Eigen::Vector2d(0.0, 0.4);
+  d = b.contact->surface_depth(q);
+  EXPECT_NEAR(d.depth, 0.3, 1e-12);
+  EXPECT_EQ(d.through, 0.0);
+}
+
+TEST(MortarContact, SweptDepthSeesAPathThroughAPlateWithinOneStep) {
+  SquareOnPlate b = square_on_plate();
+  const Vec q0 = b.model->system().initial_positions();
+  const auto moved = [&](double dy) {
+    Vec q = q0;
+    for (int n : b.square) q[2 * n + 1] += dy;
+    return q;
+  };
+  // Falling 0.05 onto the plate (0.05 above it): touching, not crossing.
+  EXPECT_EQ(b.contact->swept_depth(q0, moved(-0.05)).relative, 0.0);
+  // 0.06: 0.01 behind the top at the step's end, in the plate (0.01 of
+  // the square's 0.6 edge), not through.
+  SweptDepth s = b.contact->swept_depth(q0, moved(-0.06));
+  EXPECT_NEAR(s.depth, 0.01, 1e-12);
+  EXPECT_NEAR(s.relative, 0.01 / 0.6, 1e-12);
+  EXPECT_EQ(s.through, 0.0);
+  // 1.5: the whole square through the plate within the step, its bottom
+  // 1.45 behind the top, far beyond the band surface_depth looks in (four
+  // plate edges) and in no plate element: swept depth and through 2.4 of
+  // the square's edge; through by its distance to the plate, 1.4.
+  s = b.contact->swept_depth(q0, moved(-1.5));
+  EXPECT_NEAR(s.depth, 1.45, 1e-12);
+  EXPECT_NEAR(s.relative, 1.45 / 0.6, 1e-12);
+  EXPECT_GT(s.relative, kSweptDepthDefault);
+  EXPECT_NEAR(s.through, 1.4 / 0.6, 1e-12);
+  // The step's end sees the square's bottom nodes nowhere near the plate
+  // (beyond four plate edges); here it sees the plate's top nodes behind
+  // the square's bottom instead, within four of the square's edges. A body
+  // of fine edges (examples/known_wrong/block_tunnel_plate.toml) is seen
+  // by neither.
+  // (0.85 above the square's top).
+  EXPECT_NEAR(b.contact->surface_depth(moved(-1.5)).through, 0.85 / 0.6, 1e-12);
+  // Back the same way: the plate's nodes crossed into the square's bottom
+  // and the square's nodes out of the plate's top: nothing crossed in.
+  EXPECT_EQ(b.contact->swept_depth(moved(-1.5), q0).relative, 0.0);
+}
+
+// A path that crosses into a surface and out again within the step: the
+// depth is taken where it leaves. Passing through a ring from side to side
+// reads its chord; dipping under a vertex of its faceted face and up again
+// reads how far the leaving point lies behind the entering facet's line.
+TEST(MortarContact, SweptDepthIsTakenWhereThePathLeavesTheSurfaceAgain) {
+  Model m(2);
+  const Material mat = make_material(MaterialModel::SaintVenantKirchhoff, 100.0, 0.3, 1.0);
+  m.add_body("ring", ring_mesh({0.0, 0.0}, 0.15, 0.2, 32, 2), mat);
+  const BodyInfo block =
+      m.add_body("block", rectangle_mesh({-1.0, -0.05}, 0.2, 0.2, 2, 2), mat).info;
+  const MortarContact* c = mortar(m, add_mortar_contact(m, "block.bottom", "ring.outer", "pass"));
+  const Vec x0 = m.system().initial_positions();
+  const auto block_at = [&](Eigen::Vector2d shift) {
+    Vec q = x0;
+    for (int n = block.node_offset; n < block.node_offset + block.n_nodes; ++n)
+      q.segment<2>(2 * n) += shift;
+    return q;
+  };
+  // 1.2 to the right, 1 below the ring: nothing crossed.
+  EXPECT_EQ(c->swept_depth(block_at({0.0, -1.0}), block_at({1.2, -1.0})).relative, 0.0);
+  // 1.2 to the right at y = -0.05: the bottom's nodes (x = -1, -0.9,
+  // -0.8 to 0.2, 0.3, 0.4) pass through the ring, entering its outer face
+  // on the left and leaving on the right, 2 sqrt(0.2^2 - 0.05^2) = 0.387
+  // apart, less the facets' chords, across the entering facet's normal.
+  const SweptDepth through = c->swept_depth(x0, block_at({1.2, 0.0}));
+  EXPECT_GT(through.depth, 0.3);
+  EXPECT_LT(through.depth, 0.388);
+  EXPECT_NEAR(through.relative, through.depth / 0.1, 1e-12);  // the block's edge is the coarser
+  EXPECT_GT(through.relative, kSweptDepthDefault);
+  // The bottom's middle node 1e-3 under the ring's top vertex (0, 0.2),
+  // from x = -0.05 to 0.05: it enters the facet left of the vertex and
+  // leaves by the one right of it, where it lies 2e-3 cos(pi / 32) behind
+  // the entering facet's line (the facets turn by pi / 16 at the vertex).
+  Eigen::Vector2d top(0.0, -1.0);
+  for (int n = 0; n < m.system().n_nodes(); ++n)
+    if (x0[2 * n + 1] > top[1]) top = x0.segment<2>(2 * n);
+  ASSERT_NEAR(top[0], 0.0, 1e-15);
+  ASSERT_NEAR(top[1], 0.2, 1e-15);
+  const Eigen::Vector2d middle(-0.9, -0.05);
+  const SweptDepth dip = c->swept_depth(block_at(Eigen::Vector2d(-0.05, 0.199) - middle),
+                                        block_at(Eigen::Vector2d(0.05, 0.199) - middle));
+  EXPECT_NEAR(dip.depth, 2e-3 * std::cos(M_PI / 32), 1e-6);
+  EXPECT_LT(dip.relative, 0.05 * kSweptDepthDefault);
+  EXPECT_EQ(dip.through, 0.0);
+}
+
 }  // namespace emdae

@@ -120,6 +120,8 @@ Recorder::Recorder(const System& system, const State& initial, ExternalWork exte
   initial_.external_work = external_work_ ? external_work_(initial) : 0.0;
   measure_contact(initial, initial_);
   surface_depth_relative_start_ = surface_depth_relative_max_;
+  surface_through_start_ = surface_through_max_;
+  if (has_contact_) q_previous_ = initial.q;
   for (const auto& term : system.potentials())
     if (const auto* e = dynamic_cast<const Q1Element*>(term.get())) elements_.push_back(e);
   measure_elements(initial);
@@ -151,6 +153,7 @@ const Sample& Recorder::observe(const State& state, const AcceptedStep& step) {
   s.constraint_work = last_.constraint_work + step.stats.constraint_work;
   s.contact_events = step.stats.contact_events;
   measure_contact(state, s);
+  measure_swept(state);
   measure_elements(state);
   newton_iterations_ += s.newton_iterations;
   newton_max_per_step_ = std::max(newton_max_per_step_, s.newton_iterations);
@@ -198,6 +201,12 @@ void Recorder::measure_contact(const State& state, Sample& s) {
       surface_depth_node_ = d.node;
       surface_depth_set_ = static_cast<int>(k);
     }
+    if (d.through > surface_through_max_) {
+      surface_through_max_ = d.through;
+      surface_through_t_ = state.t;
+      surface_through_node_ = d.through_node;
+      surface_through_set_ = static_cast<int>(k);
+    }
   }
   if (s.active_contacts > 0) {
     if (std::isnan(contact_first_)) contact_first_ = s.t;
@@ -206,6 +215,28 @@ void Recorder::measure_contact(const State& state, Sample& s) {
   active_max_ = std::max(active_max_, s.active_contacts);
   keep_max(gap_violation_max_, s.gap_violation);
   keep_max(penetration_max_, s.penetration);
+}
+
+void Recorder::measure_swept(const State& state) {
+  if (!has_contact_) return;
+  const auto& sets = system_.unilateral();
+  for (std::size_t k = 0; k < sets.size(); ++k) {
+    const SweptDepth d = sets[k]->swept_depth(q_previous_, state.q);
+    keep_max(swept_depth_max_, d.depth);
+    if (d.relative > swept_depth_relative_max_) {
+      swept_depth_relative_max_ = d.relative;
+      swept_depth_t_ = state.t;
+      swept_depth_node_ = d.node;
+      swept_depth_set_ = static_cast<int>(k);
+    }
+    if (d.through > surface_through_max_) {
+      surface_through_max_ = d.through;
+      surface_through_t_ = state.t;
+      surface_through_node_ = d.through_node;
+      surface_through_set_ = static_cast<int>(k);
+    }
+  }
+  q_previous_ = state.q;
 }
 
 void Recorder::measure_elements(const State& state) {
@@ -226,6 +257,18 @@ std::string Recorder::surface_depth_where() const {
   if (surface_depth_set_ < 0 || surface_depth_node_ < 0) return "";
   return "node " + std::to_string(surface_depth_node_) + " of contact '" +
          system_.unilateral()[static_cast<std::size_t>(surface_depth_set_)]->name() + "'";
+}
+
+std::string Recorder::surface_through_where() const {
+  if (surface_through_set_ < 0 || surface_through_node_ < 0) return "";
+  return "node " + std::to_string(surface_through_node_) + " of contact '" +
+         system_.unilateral()[static_cast<std::size_t>(surface_through_set_)]->name() + "'";
+}
+
+std::string Recorder::swept_depth_where() const {
+  if (swept_depth_set_ < 0 || swept_depth_node_ < 0) return "";
+  return "node " + std::to_string(swept_depth_node_) + " of contact '" +
+         system_.unilateral()[static_cast<std::size_t>(swept_depth_set_)]->name() + "'";
 }
 
 std::string Recorder::det_f_min_element() const {
@@ -457,6 +500,12 @@ void Recorder::save(std::ostream& out) const {
                    surface_depth_relative_max_,
                    surface_depth_relative_start_,
                    surface_depth_t_,
+                   surface_through_max_,
+                   surface_through_start_,
+                   surface_through_t_,
+                   swept_depth_max_,
+                   swept_depth_relative_max_,
+                   swept_depth_t_,
                    det_f_min_,
                    det_f_min_t_})
     put(out, x);
@@ -474,6 +523,11 @@ void Recorder::save(std::ostream& out) const {
   put(out, det_f_min_element_);
   put(out, surface_depth_node_);
   put(out, surface_depth_set_);
+  put(out, surface_through_node_);
+  put(out, surface_through_set_);
+  put(out, swept_depth_node_);
+  put(out, swept_depth_set_);
+  put_vec(out, q_previous_);
 }
 
 void Recorder::restore(std::istream& in) {
@@ -509,6 +563,12 @@ void Recorder::restore(std::istream& in) {
                     &surface_depth_relative_max_,
                     &surface_depth_relative_start_,
                     &surface_depth_t_,
+                    &surface_through_max_,
+                    &surface_through_start_,
+                    &surface_through_t_,
+                    &swept_depth_max_,
+                    &swept_depth_relative_max_,
+                    &swept_depth_t_,
                     &det_f_min_,
                     &det_f_min_t_})
     *x = get<double>(in);
@@ -526,9 +586,17 @@ void Recorder::restore(std::istream& in) {
   det_f_min_element_ = get<int>(in);
   surface_depth_node_ = get<int>(in);
   surface_depth_set_ = get<int>(in);
-  if (det_f_min_element_ >= static_cast<int>(elements_.size()) ||
-      surface_depth_set_ >= static_cast<int>(system_.unilateral().size()) ||
-      surface_depth_node_ >= system_.n_nodes())
+  surface_through_node_ = get<int>(in);
+  surface_through_set_ = get<int>(in);
+  swept_depth_node_ = get<int>(in);
+  swept_depth_set_ = get<int>(in);
+  q_previous_ = get_vec(in);
+  const int sets = static_cast<int>(system_.unilateral().size());
+  if (det_f_min_element_ >= static_cast<int>(elements_.size()) || surface_depth_set_ >= sets ||
+      surface_depth_node_ >= system_.n_nodes() || surface_through_set_ >= sets ||
+      surface_through_node_ >= system_.n_nodes() || swept_depth_set_ >= sets ||
+      swept_depth_node_ >= system_.n_nodes() ||
+      (has_contact_ && q_previous_.size() != system_.n_dofs()))
     throw std::runtime_error("the checkpoint's recorder is of another system");
 }
 

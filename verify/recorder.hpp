@@ -183,6 +183,23 @@ class Recorder {
   /// 'squash'", the system's node); NaN / "" when no node lay behind.
   double surface_depth_time() const { return surface_depth_t_; }
   std::string surface_depth_where() const;
+  /// Of the nodes behind the other surface, those inside none of the other
+  /// body's elements (SurfaceDepth::through: gone through it): their
+  /// largest relative depth over the run and at the start, when and where;
+  /// 0 / NaN / "" when none.
+  double surface_through_max() const { return surface_through_max_; }
+  double surface_through_start() const { return surface_through_start_; }
+  double surface_through_time() const { return surface_through_t_; }
+  std::string surface_through_where() const;
+  /// Over every observed step (from the previous observed state), how deep
+  /// a surface node's straight path went behind an edge of the other
+  /// surface it crossed (UnilateralConstraints::swept_depth): the distance,
+  /// relative to the coarser mesh, when and where the relative one was
+  /// largest (the time is the step's end); 0 / NaN / "" when none.
+  double swept_depth_max() const { return swept_depth_max_; }
+  double swept_depth_relative_max() const { return swept_depth_relative_max_; }
+  double swept_depth_time() const { return swept_depth_t_; }
+  std::string swept_depth_where() const;
   long contact_events() const { return contact_events_; }
 
   /// Q1 bodies: the smallest det F at an element corner over the run
@@ -222,6 +239,7 @@ class Recorder {
   /// Sets the errors of `s` and takes them into the maxima.
   void update_maxima(Sample& s);
   void measure_contact(const State& state, Sample& s);
+  void measure_swept(const State& state);
   void measure_elements(const State& state);
   void track_load_free(const Sample& previous, const Sample& s);
   void track_balance(const AcceptedStep& step, const Sample& s);
@@ -259,6 +277,13 @@ class Recorder {
   double surface_depth_relative_start_ = 0.0;
   double surface_depth_t_ = std::numeric_limits<double>::quiet_NaN();
   int surface_depth_node_ = -1, surface_depth_set_ = -1;
+  double surface_through_max_ = 0.0, surface_through_start_ = 0.0;
+  double surface_through_t_ = std::numeric_limits<double>::quiet_NaN();
+  int surface_through_node_ = -1, surface_through_set_ = -1;
+  double swept_depth_max_ = 0.0, swept_depth_relative_max_ = 0.0;
+  double swept_depth_t_ = std::numeric_limits<double>::quiet_NaN();
+  int swept_depth_node_ = -1, swept_depth_set_ = -1;
+  Vec q_previous_;  // the last observed state's positions, for swept_depth
   long contact_events_ = 0;
   // Q1 elements (Q1Element::corner_det_f_min).
   std::vector<const Q1Element*> elements_;

@@ -167,6 +167,14 @@ Summary summarize(const RunInfo& info, const System& system, const Recorder& rec
     c.surface_depth_relative_start = recorder.surface_depth_relative_start();
     c.surface_depth_time = recorder.surface_depth_time();
     c.surface_depth_where = recorder.surface_depth_where();
+    c.surface_through_max = recorder.surface_through_max();
+    c.surface_through_start = recorder.surface_through_start();
+    c.surface_through_time = recorder.surface_through_time();
+    c.surface_through_where = recorder.surface_through_where();
+    c.swept_depth_max = recorder.swept_depth_max();
+    c.swept_depth_relative_max = recorder.swept_depth_relative_max();
+    c.swept_depth_time = recorder.swept_depth_time();
+    c.swept_depth_where = recorder.swept_depth_where();
     c.contact_events = recorder.contact_events();
     s.contact = c;
   }
@@ -262,6 +270,13 @@ Summary summarize(const RunInfo& info, const System& system, const Recorder& rec
         make_check("surface_depth",
                    std::max(0.0, c.surface_depth_relative_max - c.surface_depth_relative_start),
                    tolerances.surface_depth.value_or(kSurfaceDepthDefault)));
+    s.checks.push_back(make_check("surface_through",
+                                  std::max(0.0, c.surface_through_max - c.surface_through_start),
+                                  tolerances.surface_through.value_or(kSurfaceThroughDefault)));
+    // A static analysis has no steps whose paths could be swept.
+    if (!s.static_analysis)
+      s.checks.push_back(make_check("swept_depth", c.swept_depth_relative_max,
+                                    tolerances.swept_depth.value_or(kSweptDepthDefault)));
   }
   if (s.det_f_min)
     s.checks.push_back(
@@ -364,6 +379,12 @@ nlohmann::ordered_json static_json(const Summary& s) {
       j["surface_depth_time"] = s.contact->surface_depth_time;
       j["surface_depth_where"] = s.contact->surface_depth_where;
     }
+    j["surface_through_max"] = s.contact->surface_through_max;
+    j["surface_through_start"] = s.contact->surface_through_start;
+    if (!s.contact->surface_through_where.empty()) {
+      j["surface_through_time"] = s.contact->surface_through_time;
+      j["surface_through_where"] = s.contact->surface_through_where;
+    }
     if (!s.contact_pressure.empty()) j["contact_pressure"] = pressure_json(s.contact_pressure);
   }
   if (s.statics) j["statics"] = statics_json(*s.statics);
@@ -451,6 +472,18 @@ nlohmann::ordered_json to_json(const Summary& s) {
     if (!c.surface_depth_where.empty()) {
       j["surface_depth_time"] = c.surface_depth_time;
       j["surface_depth_where"] = c.surface_depth_where;
+    }
+    j["surface_through_max"] = c.surface_through_max;
+    j["surface_through_start"] = c.surface_through_start;
+    if (!c.surface_through_where.empty()) {
+      j["surface_through_time"] = c.surface_through_time;
+      j["surface_through_where"] = c.surface_through_where;
+    }
+    j["swept_depth_max"] = c.swept_depth_max;
+    j["swept_depth_relative_max"] = c.swept_depth_relative_max;
+    if (!c.swept_depth_where.empty()) {
+      j["swept_depth_time"] = c.swept_depth_time;
+      j["swept_depth_where"] = c.swept_depth_where;
     }
     j["contact_events"] = c.contact_events;
     if (!s.contact_pressure.empty()) j["contact_pressure"] = pressure_json(s.contact_pressure);
@@ -543,6 +576,23 @@ void print_summary(std::ostream& out, const Summary& s, const std::string& dir, 
                 ? std::string()
                 : fmt::format(", {} at t = {:.4g}", c.surface_depth_where, c.surface_depth_time),
             c.surface_depth_relative_start));
+    row("through the other body",
+        c.surface_through_where.empty()
+            ? std::string("none (no node behind the other surface outside its body's elements)")
+            : fmt::format("{:.3g} of the coarser local surface edge past the other body, {} at "
+                          "t = {:.4g} (behind its surface, in none of its elements, beyond them "
+                          "along the depth; {:.3g} at the start)",
+                          c.surface_through_max, c.surface_through_where, c.surface_through_time,
+                          c.surface_through_start));
+    if (!s.static_analysis)
+      row("swept depth",
+          c.swept_depth_where.empty()
+              ? std::string("none (no node's path within a step crossed into the other surface)")
+              : fmt::format("{:.3e}; {:.3g} of the coarser local surface edge, {} in the step to "
+                            "t = {:.4g} (how deep a node's straight path went behind an edge it "
+                            "crossed within one step)",
+                            c.swept_depth_max, c.swept_depth_relative_max, c.swept_depth_where,
+                            c.swept_depth_time));
     // Shown where the coverage barrier hides some: partly covered nodes.
     if (c.overlap_max > std::max(c.penetration_max, c.gap_violation_max))
       row("weighted overlap",

@@ -37,12 +37,14 @@ struct Tolerances {
   std::optional<double> contact_pressure_spread;  // max over the pairs of (max - min) / |mean|
   // Judged on every run that has what they measure, with these defaults
   // (verify/summary.cpp, summarize):
-  std::optional<double> surface_depth;  // default kSurfaceDepthDefault
-  std::optional<double> det_f_min;      // a lower bound, default 0
+  std::optional<double> surface_depth;    // default kSurfaceDepthDefault
+  std::optional<double> surface_through;  // default kSurfaceThroughDefault
+  std::optional<double> swept_depth;      // default kSweptDepthDefault
+  std::optional<double> det_f_min;        // a lower bound, default 0
   bool any() const {
     return energy_rel || energy_balance_rel || linear_momentum || angular_momentum_rel ||
            angular_momentum_balance_rel || constraint || gap_violation || penetration ||
-           contact_pressure_spread || surface_depth || det_f_min;
+           contact_pressure_spread || surface_depth || surface_through || swept_depth || det_f_min;
   }
 };
 
@@ -72,6 +74,17 @@ struct ContactFigures {
   double surface_depth_relative_start = 0.0;  // and at the start
   double surface_depth_time = 0.0;            // when and where the largest was
   std::string surface_depth_where;            // "" when no node lay behind
+  // Recorder::surface_through_max(): nodes behind the other surface and in
+  // none of its body's elements (through it), relative as surface depth
+  double surface_through_max = 0.0;
+  double surface_through_start = 0.0;
+  double surface_through_time = 0.0;
+  std::string surface_through_where;  // "" when none went through
+  // Recorder::swept_depth_*(): paths within a step behind a crossed edge
+  double swept_depth_max = 0.0;           // a distance
+  double swept_depth_relative_max = 0.0;  // of the coarser mesh
+  double swept_depth_time = 0.0;
+  std::string swept_depth_where;  // "" when no path crossed into a surface
   long contact_events = 0;
 };
 
@@ -90,6 +103,22 @@ struct Check {
 /// face by about h sin(theta) / 3 <= h / 3 (docs/hard-cases.md); half an
 /// element is a body going through the other.
 inline constexpr double kSurfaceDepthDefault = 0.5;
+
+/// The default limit of the surface_through check: the depth behind the
+/// other surface of a node that lies in none of the other body's elements,
+/// beyond the start's, as surface_depth's fraction. Such a node has passed
+/// the other body's far side, so its depth is at least the body's local
+/// thickness; legitimate runs read exactly 0 (docs/hard-cases.md). The
+/// limit is a round-off allowance, not a physical one.
+inline constexpr double kSurfaceThroughDefault = 0.01;
+
+/// The default limit of the swept_depth check: how deep, as surface_depth's
+/// fraction, a node's straight path within one step may go behind an edge
+/// of the other surface that it crossed (measured where it next leaves that
+/// surface, or at the step's end). A node that ends a step on the surface
+/// reads its surface depth there (<= h / 3 at corners); a body that passed
+/// through the other within the step reads its travel beyond the edge.
+inline constexpr double kSweptDepthDefault = 1.0;
 
 /// One component of the linear momentum judged on its own (dynamic runs
 /// whose linear momentum as a whole is not conserved).
