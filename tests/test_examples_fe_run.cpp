@@ -442,6 +442,17 @@ TEST(SceneFeRun, GeometricChecksAreJudgedOnEveryRunWithTheirDefaultsOrTheScenesL
   EXPECT_EQ(s["checks"]["surface_depth"]["limit"], 0.5);
   EXPECT_EQ(s["checks"]["surface_depth"]["value"].get<double>(),
             depth - s["surface_depth_relative_start"].get<double>());
+  // The corner stays inside the other block, and its path within a step
+  // goes as deep behind the face it crosses as it ends.
+  EXPECT_EQ(s["surface_through_max"].get<double>(), 0.0);
+  EXPECT_EQ(s["checks"]["surface_through"]["result"], "pass");
+  EXPECT_EQ(s["checks"]["surface_through"]["limit"], 0.01);
+  const double swept = s["swept_depth_relative_max"].get<double>();
+  EXPECT_GT(swept, 0.0);
+  EXPECT_LT(swept, 0.5);
+  EXPECT_EQ(s["checks"]["swept_depth"]["result"], "pass");
+  EXPECT_EQ(s["checks"]["swept_depth"]["limit"], 1.0);
+  EXPECT_EQ(s["checks"]["swept_depth"]["value"].get<double>(), swept);
   // Where and when: a node of one of its two pairs, within the run.
   const std::string where = s["surface_depth_where"].get<std::string>();
   EXPECT_EQ(where.rfind("node ", 0), 0u) << where;
@@ -451,16 +462,48 @@ TEST(SceneFeRun, GeometricChecksAreJudgedOnEveryRunWithTheirDefaultsOrTheScenesL
   EXPECT_GT(s["det_f_min_time"].get<double>(), 0.0);
   EXPECT_NE(s["det_f_min_element"].get<std::string>().find("of body 'square'"), std::string::npos);
   r = emdae("run " + scene + " -q --set output.vtu_every=0 --set tolerances.det_f_min=" +
-                std::to_string(det_f + 0.01) + " --set tolerances.surface_depth=" +
-                std::to_string(depth / 2) + " --out " + quote(dir / "b"),
+                std::to_string(det_f + 0.01) +
+                " --set tolerances.surface_depth=" + std::to_string(depth / 2) +
+                " --set tolerances.swept_depth=" + std::to_string(swept / 2) + " --out " +
+                quote(dir / "b"),
             dir.path());
   EXPECT_EQ(r.code, 4) << r.output;
   EXPECT_NE(r.output.find("check det_f_min failed"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("check surface_depth failed"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("check swept_depth failed"), std::string::npos) << r.output;
   s = read_json(dir / "b/summary.json");
+  EXPECT_EQ(s["checks"]["swept_depth"]["result"], "fail");
+  EXPECT_EQ(s["checks"]["surface_through"]["result"], "pass");
   EXPECT_EQ(s["checks"]["det_f_min"]["result"], "fail");
   EXPECT_EQ(s["checks"]["surface_depth"]["result"], "fail");
   EXPECT_EQ(s["checks_pass"], false);
+}
+
+// The outside test's wrong runs that the surface depth missed (docs/hard-cases.md,
+// "Known wrong"): a coarse corner through a thin plate (surface_through),
+// rings and a block passing through the other body within one step
+// (swept_depth). Each exits 4 naming its check, and says where and when.
+TEST(SceneFeRun, ThroughAndSweptChecksFailTheKnownWrongRunsWithExit4) {
+  TempDir dir;
+  for (const auto& [name, check] :
+       {std::pair<std::string, std::string>{"corner_through_plate", "surface_through"},
+        {"rings_tunnel", "swept_depth"},
+        {"block_tunnel_plate", "swept_depth"}}) {
+    const Result r = emdae("run " + quote(example("known_wrong/" + name)) +
+                               " -q --set output.vtu_every=0 --out " + quote(dir / name),
+                           dir.path());
+    EXPECT_EQ(r.code, 4) << name << ": " << r.output;
+    EXPECT_NE(r.output.find("check " + check + " failed"), std::string::npos) << r.output;
+    EXPECT_EQ(r.output.find("check surface_depth failed"), std::string::npos) << r.output;
+    EXPECT_EQ(r.output.find("check det_f_min failed"), std::string::npos) << r.output;
+    const nlohmann::json s = read_json(dir / (name + "/summary.json"));
+    EXPECT_EQ(s["checks"][check]["result"], "fail") << name;
+    EXPECT_EQ(s["checks"]["surface_depth"]["result"], "pass") << name;
+    const std::string prefix = check == "swept_depth" ? "swept_depth" : "surface_through";
+    const std::string where = s[prefix + "_where"].get<std::string>();
+    EXPECT_EQ(where.rfind("node ", 0), 0u) << where;
+    EXPECT_GT(s[prefix + "_time"].get<double>(), 0.0);
+  }
 }
 
 }  // namespace

@@ -15,7 +15,10 @@
 //    the scene's 10^4 steps without a single contact event, every node of
 //    the face active throughout, its energy constant to 1e-12;
 //  - HardKnownWrong: examples/known_wrong/gap_cross.toml, seen by the
-//    surface depth (Default/ by name filter: HardKnownWrong.*);
+//    surface depth; corner_through_plate.toml, seen by surface_through;
+//    rings_tunnel.toml and block_tunnel_plate.toml, seen by swept_depth;
+//    and twins of them that must pass (Default/ by name filter:
+//    HardKnownWrong.*);
 //  - HardSlideOff: a block sliding off a supported block's end at four
 //    speeds, two steps and both materials (Default/);
 //  - HardEvents: contact events where the answer is known: blocks face to
@@ -215,7 +218,9 @@ TEST_P(HardCatalogue, EnergyMomentumThroughEveryImpact) {
   const Summary& s = r.result.summary;
   ASSERT_TRUE(r.result.finished()) << r.what << ": " << s.status;
   const auto geometric = [](const std::string& violation) {
-    return violation.rfind("det_f_min", 0) == 0 || violation.rfind("surface depth", 0) == 0;
+    for (const char* figure : {"det_f_min", "surface depth", "surface through", "swept depth"})
+      if (violation.rfind(figure, 0) == 0) return true;
+    return false;
   };
   for (const auto& violation : r.verdict.violations) {
     if (c.folds && geometric(violation)) continue;
@@ -329,10 +334,129 @@ TEST(HardKnownWrong, TheSurfaceDepthCheckFailsTheSliderSinkingThroughTheSecondBl
   ASSERT_NE(check, r.summary.checks.end());
   EXPECT_EQ(check->result, "fail");
   EXPECT_FALSE(r.summary.checks_pass());
+  // The slider's nodes come out below base2: surface_through fails too.
+  EXPECT_GT(r.summary.contact->surface_through_max, kSurfaceThroughDefault);
   for (const Check& c : r.summary.checks) {  // the rest of the scene's tolerances hold
-    if (c.name == "surface_depth") continue;
+    if (c.name == "surface_depth" || c.name == "surface_through") {
+      EXPECT_EQ(c.result, "fail") << c.name;
+      continue;
+    }
     EXPECT_EQ(c.result, "pass") << c.name;
   }
+}
+
+namespace {
+
+// The scene's run, with the checks that must fail failing and every other
+// check passing.
+RunResult run_known_wrong(const Scene& scene, const std::vector<std::string>& failing) {
+  RunResult r = run(*scene.model, scene.settings);
+  EXPECT_TRUE(r.finished()) << r.summary.status;
+  for (const std::string& name : failing) {
+    const auto check = std::find_if(r.summary.checks.begin(), r.summary.checks.end(),
+                                    [&](const Check& c) { return c.name == name; });
+    EXPECT_NE(check, r.summary.checks.end()) << name;
+    if (check != r.summary.checks.end()) {
+      EXPECT_EQ(check->result, "fail") << name;
+    }
+  }
+  for (const Check& c : r.summary.checks) {
+    if (std::find(failing.begin(), failing.end(), c.name) == failing.end()) {
+      EXPECT_EQ(c.result, "pass") << c.name;
+    }
+  }
+  EXPECT_EQ(r.summary.checks_pass(), failing.empty());
+  return r;
+}
+
+// A known-wrong scene file's text with some of it replaced (its twin).
+std::unique_ptr<Scene> scene_twin(const std::string& name,
+                                  const std::vector<std::pair<std::string, std::string>>& edits) {
+  std::string text = read_text(example("known_wrong/" + name));
+  for (const auto& [from, to] : edits) {
+    const auto at = text.find(from, text.find("[scene]"));  // not in the opening comment
+    EXPECT_NE(at, std::string::npos) << from;
+    if (at != std::string::npos) text.replace(at, from.size(), to);
+  }
+  return load_scene_text(text, name + " (twin)", {SceneOverride{"output.vtu_every=0", "test"}});
+}
+
+}  // namespace
+
+// examples/known_wrong/corner_through_plate.toml: a coarse square's corner
+// through a thin plate. The surface depth, of the square's 0.6 edge, stays
+// within its bound; the corner lies behind the plate's top and in none of
+// the plate's elements, which surface_through fails.
+TEST(HardKnownWrong, TheSurfaceThroughCheckFailsACoarseCornerThroughAThinPlate) {
+  const auto scene =
+      load_scene(example("known_wrong/corner_through_plate"), {"output.vtu_every=0"});
+  const RunResult r = run_known_wrong(*scene, {"surface_through"});
+  ASSERT_TRUE(r.summary.contact);
+  const ContactFigures& c = *r.summary.contact;
+  EXPECT_LT(c.surface_depth_relative_max, kSurfaceDepthDefault);
+  EXPECT_GT(c.surface_depth_max, 0.05);  // deeper than the plate is thick
+  // Its distance below the plate, of the square's edge.
+  EXPECT_GT(c.surface_through_max, 0.05);
+  EXPECT_LT(c.surface_through_max, (c.surface_depth_max - 0.05) / 0.6 + 1e-9);
+  EXPECT_EQ(c.surface_through_start, 0.0);
+  EXPECT_NE(c.surface_through_where.find("contact 'b'"), std::string::npos)
+      << c.surface_through_where;
+}
+
+// Its twin, the plate 0.3 thick (the square dropped from as high above
+// it): the corner cuts into the plate as deep and stays inside it.
+TEST(HardKnownWrong, ACoarseCornerIntoAThickPlateStaysInsideIt) {
+  const auto scene =
+      scene_twin("corner_through_plate",
+                 {{"height = 0.05", "height = 0.3"}, {"0.1698076211353316", "0.4198076211353316"}});
+  const RunResult r = run_known_wrong(*scene, {});
+  ASSERT_TRUE(r.summary.contact);
+  EXPECT_GT(r.summary.contact->surface_depth_max, 0.1);
+  EXPECT_EQ(r.summary.contact->surface_through_max, 0.0);
+}
+
+// examples/known_wrong/rings_tunnel.toml: the rings pass through each other
+// within one step; no step end shows it, swept_depth does (and
+// surface_through: paths that end the step in the other ring's hole).
+TEST(HardKnownWrong, TheSweptDepthCheckFailsRingsPassingThroughEachOtherWithinAStep) {
+  const auto scene = load_scene(example("known_wrong/rings_tunnel"), {"output.vtu_every=0"});
+  const RunResult r = run_known_wrong(*scene, {"surface_through", "swept_depth"});
+  ASSERT_TRUE(r.summary.contact);
+  const ContactFigures& c = *r.summary.contact;
+  EXPECT_EQ(c.surface_depth_max, 0.0);  // nothing at any step end
+  EXPECT_FALSE(c.first);
+  EXPECT_GT(c.swept_depth_max, 0.3);  // most of a ring's diameter (0.4)
+  EXPECT_GT(c.swept_depth_relative_max, 5.0);
+  EXPECT_DOUBLE_EQ(c.swept_depth_time, 0.05);  // the first step
+  EXPECT_DOUBLE_EQ(c.surface_through_time, 0.05);
+}
+
+// Its twin: the rings closing at 2 with dt = 0.005 (0.01 a step, a fifth
+// of their wall), which touch, bounce and pass every check. (At dt = 0.05,
+// 0.1 a step, they pass through each other too: twice the wall.)
+TEST(HardKnownWrong, RingsClosingTenTimesSlowerAtATenthOfTheStepMeetAndPass) {
+  const auto scene = scene_twin("rings_tunnel", {{"[10.0, 0]", "[1.0, 0]"},
+                                                 {"[-10.0, 0]", "[-1.0, 0]"},
+                                                 {"dt = 0.05", "dt = 0.005"},
+                                                 {"t_end = 0.2", "t_end = 0.3"}});
+  const RunResult r = run_known_wrong(*scene, {});
+  ASSERT_TRUE(r.summary.contact);
+  EXPECT_TRUE(r.summary.contact->first);  // they met
+  EXPECT_LT(r.summary.contact->swept_depth_relative_max, 0.5 * kSweptDepthDefault);
+}
+
+// examples/known_wrong/block_tunnel_plate.toml: a block through a thin
+// plate within its first step, ending beyond the band the surface depth
+// looks in: swept_depth and surface_through fail it.
+TEST(HardKnownWrong, TheSweptChecksFailABlockThroughAThinPlateWithinAStep) {
+  const auto scene = load_scene(example("known_wrong/block_tunnel_plate"), {"output.vtu_every=0"});
+  const RunResult r = run_known_wrong(*scene, {"surface_through", "swept_depth"});
+  ASSERT_TRUE(r.summary.contact);
+  const ContactFigures& c = *r.summary.contact;
+  EXPECT_EQ(c.surface_depth_max, 0.0);
+  EXPECT_NEAR(c.swept_depth_max, 0.79, 1e-3);  // 0.8 down from 0.01 above the top
+  EXPECT_DOUBLE_EQ(c.swept_depth_time, 0.02);
+  EXPECT_GT(c.surface_through_max, kSurfaceThroughDefault);
 }
 
 // The resting block: the scene as written (static solve, then 10^4 steps
