@@ -119,8 +119,8 @@ Recorder::Recorder(const System& system, const State& initial, ExternalWork exte
   initial_.quantities = measure(system, initial.q, initial.v, initial.t);
   initial_.external_work = external_work_ ? external_work_(initial) : 0.0;
   measure_contact(initial, initial_);
-  surface_depth_relative_start_ = surface_depth_relative_max_;
-  surface_through_start_ = surface_through_max_;
+  surface_depth_relative_start_ = surface_depth_.value;
+  surface_through_start_ = surface_through_.value;
   if (has_contact_) q_previous_ = initial.q;
   for (const auto& term : system.potentials())
     if (const auto* e = dynamic_cast<const Q1Element*>(term.get())) elements_.push_back(e);
@@ -195,18 +195,8 @@ void Recorder::measure_contact(const State& state, Sample& s) {
   for (std::size_t k = 0; k < sets.size(); ++k) {
     const SurfaceDepth d = sets[k]->surface_depth(state.q);
     keep_max(surface_depth_max_, d.depth);
-    if (d.relative > surface_depth_relative_max_) {
-      surface_depth_relative_max_ = d.relative;
-      surface_depth_t_ = state.t;
-      surface_depth_node_ = d.node;
-      surface_depth_set_ = static_cast<int>(k);
-    }
-    if (d.through > surface_through_max_) {
-      surface_through_max_ = d.through;
-      surface_through_t_ = state.t;
-      surface_through_node_ = d.through_node;
-      surface_through_set_ = static_cast<int>(k);
-    }
+    surface_depth_.offer(d.relative, state.t, d.node, k);
+    surface_through_.offer(d.through, state.t, d.through_node, k);
   }
   if (s.active_contacts > 0) {
     if (std::isnan(contact_first_)) contact_first_ = s.t;
@@ -223,18 +213,8 @@ void Recorder::measure_swept(const State& state) {
   for (std::size_t k = 0; k < sets.size(); ++k) {
     const SweptDepth d = sets[k]->swept_depth(q_previous_, state.q);
     keep_max(swept_depth_max_, d.depth);
-    if (d.relative > swept_depth_relative_max_) {
-      swept_depth_relative_max_ = d.relative;
-      swept_depth_t_ = state.t;
-      swept_depth_node_ = d.node;
-      swept_depth_set_ = static_cast<int>(k);
-    }
-    if (d.through > surface_through_max_) {
-      surface_through_max_ = d.through;
-      surface_through_t_ = state.t;
-      surface_through_node_ = d.through_node;
-      surface_through_set_ = static_cast<int>(k);
-    }
+    swept_depth_.offer(d.relative, state.t, d.node, k);
+    surface_through_.offer(d.through, state.t, d.through_node, k);
   }
   q_previous_ = state.q;
 }
@@ -253,22 +233,10 @@ void Recorder::measure_elements(const State& state) {
   }
 }
 
-std::string Recorder::surface_depth_where() const {
-  if (surface_depth_set_ < 0 || surface_depth_node_ < 0) return "";
-  return "node " + std::to_string(surface_depth_node_) + " of contact '" +
-         system_.unilateral()[static_cast<std::size_t>(surface_depth_set_)]->name() + "'";
-}
-
-std::string Recorder::surface_through_where() const {
-  if (surface_through_set_ < 0 || surface_through_node_ < 0) return "";
-  return "node " + std::to_string(surface_through_node_) + " of contact '" +
-         system_.unilateral()[static_cast<std::size_t>(surface_through_set_)]->name() + "'";
-}
-
-std::string Recorder::swept_depth_where() const {
-  if (swept_depth_set_ < 0 || swept_depth_node_ < 0) return "";
-  return "node " + std::to_string(swept_depth_node_) + " of contact '" +
-         system_.unilateral()[static_cast<std::size_t>(swept_depth_set_)]->name() + "'";
+std::string Recorder::where(const Largest& l) const {
+  if (l.set < 0 || l.node < 0) return "";
+  return "node " + std::to_string(l.node) + " of contact '" +
+         system_.unilateral()[static_cast<std::size_t>(l.set)]->name() + "'";
 }
 
 std::string Recorder::det_f_min_element() const {
@@ -497,15 +465,15 @@ void Recorder::save(std::ostream& out) const {
                    constraint_max_,
                    overlap_max_,
                    surface_depth_max_,
-                   surface_depth_relative_max_,
+                   surface_depth_.value,
                    surface_depth_relative_start_,
-                   surface_depth_t_,
-                   surface_through_max_,
+                   surface_depth_.t,
+                   surface_through_.value,
                    surface_through_start_,
-                   surface_through_t_,
+                   surface_through_.t,
                    swept_depth_max_,
-                   swept_depth_relative_max_,
-                   swept_depth_t_,
+                   swept_depth_.value,
+                   swept_depth_.t,
                    det_f_min_,
                    det_f_min_t_})
     put(out, x);
@@ -521,12 +489,10 @@ void Recorder::save(std::ostream& out) const {
   put(out, newton_max_per_step_);
   put(out, cutbacks_);
   put(out, det_f_min_element_);
-  put(out, surface_depth_node_);
-  put(out, surface_depth_set_);
-  put(out, surface_through_node_);
-  put(out, surface_through_set_);
-  put(out, swept_depth_node_);
-  put(out, swept_depth_set_);
+  for (const Largest* l : {&surface_depth_, &surface_through_, &swept_depth_}) {
+    put(out, l->node);
+    put(out, l->set);
+  }
   put_vec(out, q_previous_);
 }
 
@@ -560,15 +526,15 @@ void Recorder::restore(std::istream& in) {
                     &constraint_max_,
                     &overlap_max_,
                     &surface_depth_max_,
-                    &surface_depth_relative_max_,
+                    &surface_depth_.value,
                     &surface_depth_relative_start_,
-                    &surface_depth_t_,
-                    &surface_through_max_,
+                    &surface_depth_.t,
+                    &surface_through_.value,
                     &surface_through_start_,
-                    &surface_through_t_,
+                    &surface_through_.t,
                     &swept_depth_max_,
-                    &swept_depth_relative_max_,
-                    &swept_depth_t_,
+                    &swept_depth_.value,
+                    &swept_depth_.t,
                     &det_f_min_,
                     &det_f_min_t_})
     *x = get<double>(in);
@@ -584,20 +550,17 @@ void Recorder::restore(std::istream& in) {
   newton_max_per_step_ = get<int>(in);
   cutbacks_ = get<long>(in);
   det_f_min_element_ = get<int>(in);
-  surface_depth_node_ = get<int>(in);
-  surface_depth_set_ = get<int>(in);
-  surface_through_node_ = get<int>(in);
-  surface_through_set_ = get<int>(in);
-  swept_depth_node_ = get<int>(in);
-  swept_depth_set_ = get<int>(in);
+  for (Largest* l : {&surface_depth_, &surface_through_, &swept_depth_}) {
+    l->node = get<int>(in);
+    l->set = get<int>(in);
+  }
   q_previous_ = get_vec(in);
   const int sets = static_cast<int>(system_.unilateral().size());
-  if (det_f_min_element_ >= static_cast<int>(elements_.size()) || surface_depth_set_ >= sets ||
-      surface_depth_node_ >= system_.n_nodes() || surface_through_set_ >= sets ||
-      surface_through_node_ >= system_.n_nodes() || swept_depth_set_ >= sets ||
-      swept_depth_node_ >= system_.n_nodes() ||
-      (has_contact_ && q_previous_.size() != system_.n_dofs()))
-    throw std::runtime_error("the checkpoint's recorder is of another system");
+  bool foreign = det_f_min_element_ >= static_cast<int>(elements_.size()) ||
+                 (has_contact_ && q_previous_.size() != system_.n_dofs());
+  for (const Largest* l : {&surface_depth_, &surface_through_, &swept_depth_})
+    foreign = foreign || l->set >= sets || l->node >= system_.n_nodes();
+  if (foreign) throw std::runtime_error("the checkpoint's recorder is of another system");
 }
 
 }  // namespace emdae

@@ -177,29 +177,29 @@ class Recorder {
   /// The same depth as a fraction of the length of the surface edge the node
   /// lay behind (at a vertex: the mean of its two edges), the maximum over
   /// the run and at the start (bodies that start overlapping: a press fit).
-  double surface_depth_relative_max() const { return surface_depth_relative_max_; }
+  double surface_depth_relative_max() const { return surface_depth_.value; }
   double surface_depth_relative_start() const { return surface_depth_relative_start_; }
   /// When and where the largest relative depth was ("node 17 of contact
   /// 'squash'", the system's node); NaN / "" when no node lay behind.
-  double surface_depth_time() const { return surface_depth_t_; }
-  std::string surface_depth_where() const;
+  double surface_depth_time() const { return surface_depth_.t; }
+  std::string surface_depth_where() const { return where(surface_depth_); }
   /// Of the nodes behind the other surface, those inside none of the other
   /// body's elements (SurfaceDepth::through: gone through it): their
   /// largest relative depth over the run and at the start, when and where;
   /// 0 / NaN / "" when none.
-  double surface_through_max() const { return surface_through_max_; }
+  double surface_through_max() const { return surface_through_.value; }
   double surface_through_start() const { return surface_through_start_; }
-  double surface_through_time() const { return surface_through_t_; }
-  std::string surface_through_where() const;
+  double surface_through_time() const { return surface_through_.t; }
+  std::string surface_through_where() const { return where(surface_through_); }
   /// Over every observed step (from the previous observed state), how deep
   /// a surface node's straight path went behind an edge of the other
   /// surface it crossed (UnilateralConstraints::swept_depth): the distance,
   /// relative to the coarser mesh, when and where the relative one was
   /// largest (the time is the step's end); 0 / NaN / "" when none.
   double swept_depth_max() const { return swept_depth_max_; }
-  double swept_depth_relative_max() const { return swept_depth_relative_max_; }
-  double swept_depth_time() const { return swept_depth_t_; }
-  std::string swept_depth_where() const;
+  double swept_depth_relative_max() const { return swept_depth_.value; }
+  double swept_depth_time() const { return swept_depth_.t; }
+  std::string swept_depth_where() const { return where(swept_depth_); }
   long contact_events() const { return contact_events_; }
 
   /// Q1 bodies: the smallest det F at an element corner over the run
@@ -273,17 +273,25 @@ class Recorder {
   // Contact.
   int active_max_ = 0;
   double gap_violation_max_ = 0.0, penetration_max_ = 0.0, overlap_max_ = 0.0;
-  double surface_depth_max_ = 0.0, surface_depth_relative_max_ = 0.0;
-  double surface_depth_relative_start_ = 0.0;
-  double surface_depth_t_ = std::numeric_limits<double>::quiet_NaN();
-  int surface_depth_node_ = -1, surface_depth_set_ = -1;
-  double surface_through_max_ = 0.0, surface_through_start_ = 0.0;
-  double surface_through_t_ = std::numeric_limits<double>::quiet_NaN();
-  int surface_through_node_ = -1, surface_through_set_ = -1;
-  double swept_depth_max_ = 0.0, swept_depth_relative_max_ = 0.0;
-  double swept_depth_t_ = std::numeric_limits<double>::quiet_NaN();
-  int swept_depth_node_ = -1, swept_depth_set_ = -1;
-  Vec q_previous_;  // the last observed state's positions, for swept_depth
+  // A geometric figure's largest value over the run, when and where (a
+  // system node of a contact set) it was reached.
+  struct Largest {
+    double value = 0.0;
+    double t = std::numeric_limits<double>::quiet_NaN();
+    int node = -1, set = -1;
+    void offer(double v, double at, int at_node, std::size_t at_set) {
+      if (v > value) value = v, t = at, node = at_node, set = static_cast<int>(at_set);
+    }
+  };
+  /// "node 17 of contact 'squash'", or "" when nothing was reached.
+  std::string where(const Largest& l) const;
+  double surface_depth_max_ = 0.0, surface_depth_relative_start_ = 0.0;
+  Largest surface_depth_;  // relative
+  double surface_through_start_ = 0.0;
+  Largest surface_through_;
+  double swept_depth_max_ = 0.0;
+  Largest swept_depth_;  // relative
+  Vec q_previous_;       // the last observed state's positions, for swept_depth
   long contact_events_ = 0;
   // Q1 elements (Q1Element::corner_det_f_min).
   std::vector<const Q1Element*> elements_;

@@ -315,6 +315,34 @@ nlohmann::ordered_json pressure_json(const std::vector<PairPressure>& pairs) {
   return out;
 }
 
+// The contact figures both analyses report, from the gap violation to the
+// geometric checks' (the swept depth only where steps are observed).
+void contact_figures_json(const ContactFigures& c, bool with_swept, nlohmann::ordered_json& j) {
+  j["gap_violation_max"] = c.gap_violation_max;
+  j["penetration_max"] = c.penetration_max;
+  j["overlap_max"] = c.overlap_max;
+  j["surface_depth_max"] = c.surface_depth_max;
+  j["surface_depth_relative_max"] = c.surface_depth_relative_max;
+  j["surface_depth_relative_start"] = c.surface_depth_relative_start;
+  if (!c.surface_depth_where.empty()) {
+    j["surface_depth_time"] = c.surface_depth_time;
+    j["surface_depth_where"] = c.surface_depth_where;
+  }
+  j["surface_through_max"] = c.surface_through_max;
+  j["surface_through_start"] = c.surface_through_start;
+  if (!c.surface_through_where.empty()) {
+    j["surface_through_time"] = c.surface_through_time;
+    j["surface_through_where"] = c.surface_through_where;
+  }
+  if (!with_swept) return;
+  j["swept_depth_max"] = c.swept_depth_max;
+  j["swept_depth_relative_max"] = c.swept_depth_relative_max;
+  if (!c.swept_depth_where.empty()) {
+    j["swept_depth_time"] = c.swept_depth_time;
+    j["swept_depth_where"] = c.swept_depth_where;
+  }
+}
+
 nlohmann::ordered_json statics_json(const StaticsOutcome& st) {
   return {{"converged", st.converged},
           {"steps", st.steps},
@@ -369,22 +397,7 @@ nlohmann::ordered_json static_json(const Summary& s) {
   }
   if (s.contact) {
     j["active_contacts"] = s.active_contacts;
-    j["gap_violation_max"] = s.contact->gap_violation_max;
-    j["penetration_max"] = s.contact->penetration_max;
-    j["overlap_max"] = s.contact->overlap_max;
-    j["surface_depth_max"] = s.contact->surface_depth_max;
-    j["surface_depth_relative_max"] = s.contact->surface_depth_relative_max;
-    j["surface_depth_relative_start"] = s.contact->surface_depth_relative_start;
-    if (!s.contact->surface_depth_where.empty()) {
-      j["surface_depth_time"] = s.contact->surface_depth_time;
-      j["surface_depth_where"] = s.contact->surface_depth_where;
-    }
-    j["surface_through_max"] = s.contact->surface_through_max;
-    j["surface_through_start"] = s.contact->surface_through_start;
-    if (!s.contact->surface_through_where.empty()) {
-      j["surface_through_time"] = s.contact->surface_through_time;
-      j["surface_through_where"] = s.contact->surface_through_where;
-    }
+    contact_figures_json(*s.contact, false, j);
     if (!s.contact_pressure.empty()) j["contact_pressure"] = pressure_json(s.contact_pressure);
   }
   if (s.statics) j["statics"] = statics_json(*s.statics);
@@ -463,28 +476,7 @@ nlohmann::ordered_json to_json(const Summary& s) {
     j["contact_window"] = c.first ? nlohmann::ordered_json::array({*c.first, *c.last})
                                   : nlohmann::ordered_json(nullptr);
     j["active_contacts_max"] = c.active_contacts_max;
-    j["gap_violation_max"] = c.gap_violation_max;
-    j["penetration_max"] = c.penetration_max;
-    j["overlap_max"] = c.overlap_max;
-    j["surface_depth_max"] = c.surface_depth_max;
-    j["surface_depth_relative_max"] = c.surface_depth_relative_max;
-    j["surface_depth_relative_start"] = c.surface_depth_relative_start;
-    if (!c.surface_depth_where.empty()) {
-      j["surface_depth_time"] = c.surface_depth_time;
-      j["surface_depth_where"] = c.surface_depth_where;
-    }
-    j["surface_through_max"] = c.surface_through_max;
-    j["surface_through_start"] = c.surface_through_start;
-    if (!c.surface_through_where.empty()) {
-      j["surface_through_time"] = c.surface_through_time;
-      j["surface_through_where"] = c.surface_through_where;
-    }
-    j["swept_depth_max"] = c.swept_depth_max;
-    j["swept_depth_relative_max"] = c.swept_depth_relative_max;
-    if (!c.swept_depth_where.empty()) {
-      j["swept_depth_time"] = c.swept_depth_time;
-      j["swept_depth_where"] = c.swept_depth_where;
-    }
+    contact_figures_json(c, true, j);
     j["contact_events"] = c.contact_events;
     if (!s.contact_pressure.empty()) j["contact_pressure"] = pressure_json(s.contact_pressure);
   }
