@@ -99,6 +99,7 @@ Q1Element::Q1Element(std::vector<int> dofs, const QuadNodes& x, const Material& 
     // grad_X N_A = J0^{-T} grad_xi N_A, as rows: dN = dN_parent J0^{-1}.
     gp_[static_cast<std::size_t>(g)].dn = shape_parent_gradient(p.xi, p.eta) * j.inverse();
     gp_[static_cast<std::size_t>(g)].weight = p.weight * j.determinant();
+    dn_all_.middleCols<2>(2 * g) = gp_[static_cast<std::size_t>(g)].dn;
   }
 }
 
@@ -223,10 +224,17 @@ void Q1Element::block_hessian(int block, const VecRef& pi, double, Eigen::Ref<Ma
 // is Smooth): none when |dpi| is at round-off, the quadrature of Hessian
 // differences in between, the direct quotient for large |dpi|.
 
-Eigen::Matrix2d Q1Element::point_f(const Vec8& q, int g) const {
-  const auto& dn = gp_[static_cast<std::size_t>(g)].dn;
-  Eigen::Matrix2d f = Eigen::Matrix2d::Zero();
-  for (int a = 0; a < 4; ++a) f += q.segment<2>(2 * a) * dn.row(a);
+// F = sum_A x_A dN_A^T = sum_{A > 0} (x_A - x_0) dN_A^T, as sum_A dN_A = 0:
+// the differences are of the element's size, not of the positions', and F
+// carries their round-off (on a ring of radius 50 with elements of size 3, a
+// 15th of the other's). All 4 points at once: a 2 x 3 by 3 x 8 product.
+Q1Element::Mat28 Q1Element::point_f_all(const Vec8& q) const {
+  const Eigen::Vector2d x0 = q.head<2>();
+  const Eigen::Vector2d e1 = q.segment<2>(2) - x0, e2 = q.segment<2>(4) - x0,
+                        e3 = q.segment<2>(6) - x0;
+  Mat28 f;
+  for (int c = 0; c < 8; ++c)
+    f.col(c) = e1 * dn_all_(1, c) + e2 * dn_all_(2, c) + e3 * dn_all_(3, c);
   return f;
 }
 
@@ -258,56 +266,81 @@ Q1Element::Mat83 Q1Element::point_jacobian_t(const Eigen::Matrix2d& f, int g) co
   return d;
 }
 
-void Q1Element::add_point_hessian(int g, const Eigen::Vector3d& w, Mat8& k) const {
-  if (material_.small_strain()) return;
+Eigen::Matrix2d Q1Element::point_stress(const Eigen::Matrix2d& f, const Eigen::Vector3d& s) const {
+  Eigen::Matrix2d p;
+  if (material_.small_strain()) {
+    p << s[0], s[2], s[2], s[1];
+    return p;
+  }
+  const double a = 2.0 * s[0], b = 2.0 * s[1], c = s[2];
+  p << f(0, 0) * a + f(0, 1) * c, f(0, 0) * c + f(0, 1) * b,  //
+      f(1, 0) * a + f(1, 1) * c, f(1, 0) * c + f(1, 1) * b;
+  return p;
+}
+
+void Q1Element::add_point_gab(int g, const Eigen::Vector3d& w, Eigen::Matrix4d& gab) const {
   const auto& dn = gp_[static_cast<std::size_t>(g)].dn;
   Eigen::Matrix2d sw;
-  sw << w[0], 0.5 * w[2], 0.5 * w[2], w[1];
-  const Eigen::Matrix4d gab = 2.0 * dn * sw * dn.transpose();
-  for (int a = 0; a < 4; ++a)
-    for (int b = 0; b < 4; ++b) {
+  sw << 2.0 * w[0], w[2], w[2], 2.0 * w[1];
+  const Eigen::Matrix<double, 4, 2> dsw = dn * sw;
+  gab.noalias() += dsw * dn.transpose();
+}
+
+void Q1Element::add_node_hessian(const Eigen::Matrix4d& gab, Mat8& k) const {
+  for (int b = 0; b < 4; ++b)
+    for (int a = 0; a < 4; ++a) {
       k(2 * a, 2 * b) += gab(a, b);
       k(2 * a + 1, 2 * b + 1) += gab(a, b);
     }
 }
 
+// The kernels keep the 4 Gauss points' blocks side by side: F of all points
+// is one 2 x 4 by 4 x 8 product, the forces [P_1 .. P_4] dn_all_^T one 2 x 8
+// by 8 x 4 product (point_stress), and the Jacobian's material part sum_g
+// Dpi_g^T B_g Dpi'_g one 8 x 12 by 12 x 8 product. (lazyProduct: Eigen's
+// general product kernel is slower at these sizes.)
 void Q1Element::exact_kernel(const Vec8& q, double jac_scale, Vec8& grad, Mat8* jac) const {
-  grad.setZero();
-  if (jac) jac->setZero();
+  const Mat28 f_all = point_f_all(q);
+  Mat28 p_all;
+  Mat812 d, t;
+  Eigen::Matrix4d gab = Eigen::Matrix4d::Zero();
+  const bool small = material_.small_strain();
   for (int g = 0; g < kGaussPoints; ++g) {
     const double w = gp_[static_cast<std::size_t>(g)].weight;
-    const Eigen::Matrix2d f = point_f(q, g);
+    const Eigen::Matrix2d f = f_all.middleCols<2>(2 * g);
     const Eigen::Vector3d pi = point_invariants(f);
-    const Mat83 dt = point_jacobian_t(f, g);
     const Eigen::Vector3d gv = w * material_.energy_gradient(pi);
-    grad.noalias() += dt * gv;
+    p_all.middleCols<2>(2 * g) = point_stress(f, gv);
     if (!jac) continue;
-    const Mat83 hdt = dt * (w * material_.energy_hessian(pi)).transpose();
-    jac->noalias() += dt * hdt.transpose();
-    add_point_hessian(g, gv, *jac);
+    d.middleCols<3>(3 * g) = point_jacobian_t(f, g);
+    t.middleCols<3>(3 * g).noalias() = d.middleCols<3>(3 * g) * (w * material_.energy_hessian(pi));
+    if (!small) add_point_gab(g, gv, gab);
   }
-  if (jac) *jac *= jac_scale;
+  Eigen::Map<Mat24>(grad.data()).noalias() = p_all.lazyProduct(dn_all_.transpose());
+  if (!jac) return;
+  jac->noalias() = t.lazyProduct(d.transpose());
+  if (!small) add_node_hessian(gab, *jac);
+  *jac *= jac_scale;
 }
 
 void Q1Element::discrete_kernel(const Vec8& q0, const Vec8& q1, Vec8& grad, Mat8* jac) const {
-  const Vec8 q_mid = 0.5 * (q0 + q1);
+  const Mat28 f0_all = point_f_all(q0);
+  const Mat28 f1_all = point_f_all(q1);
   const bool quadratic = material_.quadratic_in_invariants();
-  grad.setZero();
-  if (jac) jac->setZero();
+  const bool small_strain = material_.small_strain();
+  Mat28 p_all;
+  Mat812 d1, t;
+  Eigen::Matrix4d gab = Eigen::Matrix4d::Zero();
   for (int g = 0; g < kGaussPoints; ++g) {
     const double w = gp_[static_cast<std::size_t>(g)].weight;
-    const Eigen::Matrix2d f0 = point_f(q0, g), f1 = point_f(q1, g);
+    const Eigen::Matrix2d f0 = f0_all.middleCols<2>(2 * g), f1 = f1_all.middleCols<2>(2 * g);
+    const Eigen::Matrix2d fm = 0.5 * (f0 + f1);
     const Eigen::Vector3d pi0 = point_invariants(f0), pi1 = point_invariants(f1);
     const Eigen::Vector3d pim = 0.5 * (pi0 + pi1), dpi = pi1 - pi0;
-    const Mat83 dt_mid = point_jacobian_t(point_f(q_mid, g), g);
     const Eigen::Vector3d gm = w * material_.energy_gradient(pim);
-    // The block Jacobian of the discrete gradient (only with jac).
-    Eigen::Matrix3d hm = Eigen::Matrix3d::Zero(), bj = Eigen::Matrix3d::Zero();
-    if (jac) {
-      hm = w * material_.energy_hessian(pim);
-      bj = 0.5 * hm;
-    }
     Eigen::Vector3d gt = gm;
+    double c = 0.0;  // the correction's coefficient, where there is one
+    bool corrected = false;
     const double d2 = quadratic ? 0.0 : dpi.squaredNorm();
     if (d2 != 0.0) {
       const double scale = std::max(pi0.norm(), pi1.norm());
@@ -334,22 +367,31 @@ void Q1Element::discrete_kernel(const Vec8& q0, const Vec8& q1, Vec8& grad, Mat8
           const double e0 = w * material_.energy(pi0), e1 = w * material_.energy(pi1);
           numerator = e1 - e0 - gm.dot(dpi);
         }
-        const double c = numerator / d2;
+        c = numerator / d2;
         gt += c * dpi;
-        if (jac) {
-          const Eigen::Vector3d g1 = w * material_.energy_gradient(pi1);
-          const Eigen::Vector3d dc = (g1 - 0.5 * hm * dpi - gm - 2.0 * c * dpi) / d2;
-          bj += dpi * dc.transpose();
-          bj.diagonal().array() += c;
-        }
+        corrected = true;
       }
     }
-    grad.noalias() += dt_mid * gt;
+    p_all.middleCols<2>(2 * g) = point_stress(fm, gt);
     if (!jac) continue;
-    const Mat83 bdt = point_jacobian_t(f1, g) * bj.transpose();
-    jac->noalias() += dt_mid * bdt.transpose();
-    add_point_hessian(g, 0.5 * gt, *jac);
+    // The block Jacobian of the discrete gradient: H(pim) / 2, and with a
+    // correction its derivative d(c dpi)/dpi1.
+    Eigen::Matrix3d bj = (0.5 * w) * material_.energy_hessian(pim);
+    if (corrected) {
+      const Eigen::Vector3d g1 = w * material_.energy_gradient(pi1);
+      const Eigen::Vector3d dc = (g1 - bj * dpi - gm - 2.0 * c * dpi) / d2;
+      bj += dpi * dc.transpose();
+      bj.diagonal().array() += c;
+    }
+    // Dpi(q_mid)^T B Dpi(q1): t holds Dpi(q_mid)^T B, d1 Dpi(q1)^T.
+    t.middleCols<3>(3 * g).noalias() = point_jacobian_t(fm, g) * bj;
+    d1.middleCols<3>(3 * g) = point_jacobian_t(f1, g);
+    if (!small_strain) add_point_gab(g, 0.5 * gt, gab);
   }
+  Eigen::Map<Mat24>(grad.data()).noalias() = p_all.lazyProduct(dn_all_.transpose());
+  if (!jac) return;
+  jac->noalias() = t.lazyProduct(d1.transpose());
+  if (!small_strain) add_node_hessian(gab, *jac);
 }
 
 void Q1Element::kernel(GradientKind kind, const Vec8& q0, const Vec8& q1, Vec8& grad,
@@ -403,10 +445,11 @@ bool Q1Element::global_value(const Vec& q, double, double& value) const {
   const auto& d = dofs();
   Vec8 a;
   for (int i = 0; i < 8; ++i) a[i] = q[d[static_cast<std::size_t>(i)]];
+  const Mat28 f_all = point_f_all(a);
   value = 0.0;
   for (int g = 0; g < kGaussPoints; ++g)
-    value +=
-        gp_[static_cast<std::size_t>(g)].weight * material_.energy(point_invariants(point_f(a, g)));
+    value += gp_[static_cast<std::size_t>(g)].weight *
+             material_.energy(point_invariants(f_all.middleCols<2>(2 * g)));
   return true;
 }
 

@@ -104,23 +104,36 @@ class Q1Element final : public Term {
   using Vec8 = Eigen::Matrix<double, 8, 1>;
   using Mat8 = Eigen::Matrix<double, 8, 8>;
   using Mat83 = Eigen::Matrix<double, 8, 3>;
+  using Mat24 = Eigen::Matrix<double, 2, 4>;    // column A: node A's x and y
+  using Mat812 = Eigen::Matrix<double, 8, 12>;  // the 4 Gauss points' 8 x 3 blocks
+  using Mat28 = Eigen::Matrix<double, 2, 8>;    // the 4 Gauss points' 2 x 2 blocks
   // F, pi and Dpi of Gauss point g (fixed sizes). Always inlined: they are
   // the kernels' inner loop, and a call each costs as much as their work.
-  [[gnu::always_inline]] inline Eigen::Matrix2d point_f(const Vec8& q, int g) const;
+  [[gnu::always_inline]] inline Mat28 point_f_all(const Vec8& q) const;  // [F_1 .. F_4]
   [[gnu::always_inline]] inline Eigen::Vector3d point_invariants(const Eigen::Matrix2d& f) const;
   // Dpi transposed (8 x 3): its columns are contiguous, so the products
   // Dpi^T X vectorize over the 8 rows.
   [[gnu::always_inline]] inline Mat83 point_jacobian_t(const Eigen::Matrix2d& f, int g) const;
-  // k += sum_k w_k A_k of Gauss point g.
-  [[gnu::always_inline]] inline void add_point_hessian(int g, const Eigen::Vector3d& w,
-                                                       Mat8& k) const;
+  // Dpi^T s of Gauss point g as a 2 x 4 matrix of nodal forces is P dN^T
+  // with P = F [2 s0, s2; s2, 2 s1] (small strain: P = [s0, s2; s2, s1]):
+  // point_stress gives P, and the forces of all points are [P_1 .. P_4]
+  // dn_all_^T, one product instead of 4 of Dpi^T's 8 x 3.
+  [[gnu::always_inline]] inline Eigen::Matrix2d point_stress(const Eigen::Matrix2d& f,
+                                                             const Eigen::Vector3d& s) const;
+  // sum_k w_k A_k of Gauss point g is G (x) I_2 with the 4 x 4 G = 2 dN Sw
+  // dN^T (add_invariant_hessians): add_point_gab sums G over the points,
+  // add_node_hessian adds the sum to k's x-x and y-y entries once.
+  [[gnu::always_inline]] inline void add_point_gab(int g, const Eigen::Vector3d& w,
+                                                   Eigen::Matrix4d& gab) const;
+  [[gnu::always_inline]] inline void add_node_hessian(const Eigen::Matrix4d& gab, Mat8& k) const;
   void exact_kernel(const Vec8& q, double jac_scale, Vec8& grad, Mat8* jac) const;
   void discrete_kernel(const Vec8& q0, const Vec8& q1, Vec8& grad, Mat8* jac) const;
   // The kernel of `kind` on local positions (fixed_gradient, add_fixed).
   void kernel(GradientKind kind, const Vec8& q0, const Vec8& q1, Vec8& grad, Mat8* jac) const;
 
   std::array<GaussPoint, kGaussPoints> gp_;
-  std::array<double, 4> corner_area_;  // (x_a+1 - x_a) x (x_a-1 - x_a), reference
+  Eigen::Matrix<double, 4, 8> dn_all_;  // [dn_1 .. dn_4]: F of all points is X dn_all_
+  std::array<double, 4> corner_area_;   // (x_a+1 - x_a) x (x_a-1 - x_a), reference
   Material material_;
   int index_;
   std::shared_ptr<const std::string> body_;
