@@ -5,6 +5,7 @@
 #include <cmath>
 #include <limits>
 #include <map>
+#include <optional>
 #include <stdexcept>
 
 #include "core/fe_element.hpp"
@@ -21,29 +22,70 @@ Eigen::Vector2d node_position(const Vec& q, int node) {
 // How far p lies behind the chain `edges` (body on each edge's left): the
 // distance and the length of the edge it lies behind (at a vertex, the mean
 // of its two edges); zero in front, or nearest to an open end of the chain.
-// Brute force over the edges; `box` is the chain's bounding box at q grown
-// by four of its mean edge lengths (p outside it: zero). A node that sinks
-// deeper has passed that band, continuously, and the recorder's maximum has
-// it from there.
+// `box` is the chain's bounding box at q grown by four of its mean edge
+// lengths (p outside it: zero). A node that sinks deeper has passed that
+// band, continuously, and the recorder's maximum has it from there.
 struct Behind {
   double depth = 0.0, edge = 0.0;
   std::size_t index = 0;              // the nearest edge
   Eigen::Vector2d closest{0.0, 0.0};  // the nearest point of the chain
 };
 
+// A chain's edges at q, taken once for all the nodes tested against it:
+// start, direction, squared length and bounding box.
+struct ChainEdges {
+  ChainEdges(const std::vector<std::array<int, 2>>& edges, const Vec& q) : at(edges.size()) {
+    double length = 0.0;
+    for (std::size_t e = 0; e < edges.size(); ++e) {
+      Edge& g = at[e];
+      g.a = node_position(q, edges[e][0]);
+      const Eigen::Vector2d b = node_position(q, edges[e][1]);
+      g.d = b - g.a;
+      g.dd = g.d.squaredNorm();
+      g.lo = g.a.cwiseMin(b);
+      g.hi = g.a.cwiseMax(b);
+      length += std::sqrt(g.dd);
+    }
+    tolerance = 1e-9 * length / static_cast<double>(edges.size());
+  }
+  struct Edge {
+    Eigen::Vector2d a, d, lo, hi;
+    double dd = 0.0;
+  };
+  std::vector<Edge> at;
+  double tolerance = 0.0;  // distances are compared to 1e-9 of the mean edge
+  std::size_t last = 0;    // the previous point's nearest edge: the next's first guess
+};
+
 Behind depth_behind(const std::vector<std::array<int, 2>>& edges, const Vec& q,
-                    const Eigen::Vector2d& p, const Eigen::AlignedBox2d& box) {
+                    const Eigen::Vector2d& p, const Eigen::AlignedBox2d& box, ChainEdges& chain) {
   if (!box.contains(p)) return {};
+  // The nearest edge, the first of equals as a scan of all has it. An edge
+  // whose box is farther than the nearest found so far (by more than the
+  // tolerance, for round-off) is not measured; the previous point's nearest
+  // (a neighbour along the surface) is measured first, so that most are not.
   double best = std::numeric_limits<double>::infinity();
   std::size_t best_edge = 0;
   double best_t = 0.0;
-  for (std::size_t e = 0; e < edges.size(); ++e) {
-    const Eigen::Vector2d a = node_position(q, edges[e][0]), d = node_position(q, edges[e][1]) - a;
-    const double dd = d.squaredNorm();
-    const double t = dd > 0.0 ? std::clamp((p - a).dot(d) / dd, 0.0, 1.0) : 0.0;
-    const double dist = (a + t * d - p).squaredNorm();
-    if (dist < best) best = dist, best_edge = e, best_t = t;
+  double bound = best;  // (sqrt(best) + tolerance)^2
+  const auto measure = [&](std::size_t e) {
+    const ChainEdges::Edge& g = chain.at[e];
+    const double t = g.dd > 0.0 ? std::clamp((p - g.a).dot(g.d) / g.dd, 0.0, 1.0) : 0.0;
+    const double dist = (g.a + t * g.d - p).squaredNorm();
+    if (dist < best || (dist == best && e < best_edge)) {
+      best = dist, best_edge = e, best_t = t;
+      bound = std::pow(std::sqrt(best) + chain.tolerance, 2);
+    }
+  };
+  if (chain.last < chain.at.size()) measure(chain.last);
+  for (std::size_t e = 0; e < chain.at.size(); ++e) {
+    if (e == chain.last) continue;
+    const ChainEdges::Edge& g = chain.at[e];
+    const Eigen::Vector2d out = (g.lo - p).cwiseMax(p - g.hi).cwiseMax(0.0);
+    if (out.squaredNorm() > bound) continue;
+    measure(e);
   }
+  chain.last = best_edge;
   const auto along = [&](std::size_t e) {
     return Eigen::Vector2d(node_position(q, edges[e][1]) - node_position(q, edges[e][0]));
   };
@@ -298,9 +340,12 @@ SurfaceDepth MortarContact::surface_depth(const Vec& q) const {
                            const BodyElements& other_body) {
     const Eigen::AlignedBox2d box = chain_box(other, q);
     std::map<int, double> own_edge;
+    std::optional<ChainEdges> chain;  // taken for the first node in the box
     for (int node : nodes) {
       const Eigen::Vector2d p = node_position(q, node);
-      const Behind b = depth_behind(other, q, p, box);
+      if (!box.contains(p)) continue;
+      if (!chain) chain.emplace(other, q);
+      const Behind b = depth_behind(other, q, p, box, *chain);
       if (!(b.depth > 0.0)) continue;
       if (own_edge.empty()) own_edge = longest_edge_at(own.edges, q);
       const double h = std::max(b.edge, own_edge[node]);
