@@ -61,10 +61,12 @@ void resultant_and_moment(int dim, const Vec& x, const Vec& f, Vec& resultant, V
   }
 }
 
-Quantities measure(const System& system, const Vec& q, const Vec& v, double t) {
+Quantities measure(const System& system, const Vec& q, const Vec& v, double t, Vec* momenta) {
   Quantities out;
   const int dim = system.dim();
-  const Vec p = system.mass() * v;
+  Vec own;
+  Vec& p = momenta ? *momenta : own;
+  p = system.mass() * v;
   out.kinetic = 0.5 * v.dot(p);
   out.potential = potential_energy(system, q, t);
   resultant_and_moment(dim, q, p, out.linear_momentum, out.angular_momentum);

@@ -15,7 +15,10 @@ struct Quantities {
   double phi_max = 0.0;  // max |Phi_l(q, t)|
 };
 
-Quantities measure(const System& system, const Vec& q, const Vec& v, double t);
+/// Energies, momenta and constraint residual at (q, v, t); with `momenta`,
+/// also the nodal momenta M v they are taken from.
+Quantities measure(const System& system, const Vec& q, const Vec& v, double t,
+                   Vec* momenta = nullptr);
 
 /// Resultant sum_A f_A and moment about the origin sum_A x_A x f_A (one
 /// component in 2D) of nodal vectors f (dim entries per node) at positions

@@ -36,10 +36,10 @@ void add_unique(std::vector<std::string>& list, const std::string& item) {
   if (std::find(list.begin(), list.end(), item) == list.end()) list.push_back(item);
 }
 
-// Sum over nodes of |q_a| |p_a|: the size angular momentum could have, to
-// tell a J_0 that is zero by symmetry from one that is merely small.
-double angular_momentum_scale(const System& system, const Vec& q, const Vec& v) {
-  const Vec p = system.mass() * v;
+// Sum over nodes of |q_a| |p_a| (p = M v, the nodal momenta): the size
+// angular momentum could have, to tell a J_0 that is zero by symmetry from
+// one that is merely small.
+double angular_momentum_scale(const System& system, const Vec& q, const Vec& p) {
   const int dim = system.dim();
   double s = 0.0;
   for (int a = 0; a < system.n_nodes(); ++a)
@@ -128,7 +128,7 @@ Recorder::Recorder(const System& system, const State& initial, ExternalWork exte
   const Quantities& q0 = initial_.quantities;
   energy_scale_ = std::max(std::abs(q0.total()), q0.kinetic + std::abs(q0.potential));
   const double j0 = q0.angular_momentum.norm();
-  const double j_size = angular_momentum_scale(system, initial.q, initial.v);
+  const double j_size = angular_momentum_scale(system, initial.q, system.mass() * initial.v);
   angular_scale_ = (j0 > 1e-12 * j_size) ? j0 : 0.0;
   angular_reach_max_ = j_size;
   impulse_ = Vec::Zero(q0.linear_momentum.size());
@@ -143,7 +143,7 @@ const Sample& Recorder::observe(const State& state, const AcceptedStep& step) {
   s.step = last_.step + 1;
   s.t = state.t;
   s.dt = step.dt;
-  s.quantities = measure(system_, state.q, state.v, state.t);
+  s.quantities = measure(system_, state.q, state.v, state.t, &momenta_);
   s.newton_iterations = step.stats.iterations;
   s.cutbacks = step.cutbacks;
   // The steppers report the work of the loads per step, exactly what enters
@@ -163,7 +163,7 @@ const Sample& Recorder::observe(const State& state, const AcceptedStep& step) {
   track_balance(step, s);
   if (conservation_.angular_balance)
     angular_reach_max_ =
-        std::max(angular_reach_max_, angular_momentum_scale(system_, state.q, state.v));
+        std::max(angular_reach_max_, angular_momentum_scale(system_, state.q, momenta_));
   update_maxima(s);
   last_ = std::move(s);
   return last_;

@@ -270,6 +270,7 @@ class Recorder {
   // of a state can have: below 1e-12 of it max |J| is round-off, and the
   // balance is reported absolute.
   double angular_reach_max_ = 0.0;
+  Vec momenta_;  // M v of the last sample (measure's), for angular_reach_max_
   // Contact.
   int active_max_ = 0;
   double gap_violation_max_ = 0.0, penetration_max_ = 0.0, overlap_max_ = 0.0;
