@@ -188,6 +188,19 @@ MortarGapTerm::MortarGapTerm(const std::vector<int>& nodes, std::vector<MortarPa
   if (!(weight_ > 0)) throw std::invalid_argument(name_ + ": mortar weight must be positive");
 }
 
+bool MortarGapTerm::joins(const std::vector<int>& nodes,
+                          const std::vector<MortarPair>& pairs) const {
+  const auto& d = dofs();
+  if (d.size() != 2 * nodes.size() || pairs.size() != pairs_.size()) return false;
+  for (std::size_t k = 0; k < nodes.size(); ++k)
+    if (d[2 * k] != 2 * nodes[k] || d[2 * k + 1] != 2 * nodes[k] + 1) return false;
+  for (std::size_t b = 0; b < pairs.size(); ++b)
+    if (pairs[b].local_nodes != pairs_[b].local_nodes ||
+        pairs[b].slave_node != pairs_[b].slave_node)
+      return false;
+  return true;
+}
+
 namespace {
 
 // The vectors of a pair's invariants at q (local): a = x2s - x1s along the
@@ -351,17 +364,30 @@ double MortarGapTerm::coverage(const Vec& q) const {
   return c;
 }
 
-double MortarGapTerm::engaged_value(const Vec& q, bool with_barrier) const {
-  Vec pi;
-  invariants(q, pi);
+template <class At>
+double MortarGapTerm::engaged(const Vec& q, At at, bool with_barrier) const {
   double f = 0.0, c = 0.0;
-  for (int b = 0; b < n_blocks(); ++b) {
-    const auto pb = pi.segment(5 * b, 5);
-    f += block_value(b, pb, 0.0);
-    c += mortar_pair_share(pb.data(), distance_fade_);
+  for (std::size_t b = 0; b < pairs_.size(); ++b) {
+    // invariants()' five of the block, on the stack.
+    const PairVectors v = pair_vectors(q, pairs_[b].local_nodes, at);
+    const double p[5] = {v.a.dot(v.a), v.a.dot(v.e1), v.a.dot(v.e2), cross(v.e1, v.a),
+                         cross(v.e2, v.a)};
+    f += block_value(static_cast<int>(b), Eigen::Map<const Vec>(p, 5), 0.0);
+    c += mortar_pair_share(p, distance_fade_);
   }
   if (!(c > 0.0)) return std::numeric_limits<double>::infinity();
   return coupled() && with_barrier ? f + coupling(c, nullptr, nullptr) : f;
+}
+
+double MortarGapTerm::engaged_value(const Vec& q, bool with_barrier) const {
+  return engaged(
+      q, [this](int n, int c) { return dof(n, c); }, with_barrier);
+}
+
+double MortarGapTerm::engaged_value_global(const Vec& global, bool with_barrier) const {
+  const auto& d = dofs();
+  return engaged(
+      global, [&](int n, int c) { return d[static_cast<std::size_t>(dof(n, c))]; }, with_barrier);
 }
 
 MortarGapTerm::CurrentWeight MortarGapTerm::current_weight(const Vec& q) const {

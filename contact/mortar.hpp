@@ -178,6 +178,9 @@ class MortarGapTerm final : public Term {
   /// engaged): both from one evaluation of the invariants. `with_barrier`
   /// false: the weighted gap sum_b g_b / W_A alone.
   double engaged_value(const Vec& q, bool with_barrier = true) const;
+  /// The same with the term's positions read from the global q by its dofs
+  /// (no gathering: the contact's gap() of every candidate, every step).
+  double engaged_value_global(const Vec& global, bool with_barrier = true) const;
   /// The node's mortar weight at q (local): w_A = int N_A dgamma over its
   /// mortar segments in the current configuration, the length over which its
   /// multiplier acts (weight() is the reference one, over whole segments),
@@ -188,10 +191,16 @@ class MortarGapTerm final : public Term {
   };
   CurrentWeight current_weight(const Vec& q) const;
   double weight() const { return weight_; }
+  /// True when the term's local nodes are `nodes` and its pairs `pairs` (the
+  /// contact search keeps such a term from the step before).
+  bool joins(const std::vector<int>& nodes, const std::vector<MortarPair>& pairs) const;
 
  private:
   // Local dof of component c of local node n.
   int dof(int n, int c) const { return 2 * n + c; }
+  // engaged_value() of the positions q[at(n, c)] of the local nodes' dofs.
+  template <class At>
+  double engaged(const Vec& q, At at, bool with_barrier) const;
   std::vector<MortarPair> pairs_;
   double weight_;
   double barrier_ = 0.0;

@@ -479,9 +479,7 @@ double MortarContact::penalty(int i) const {
 double MortarContact::engaged_value(int i, const Vec& q, bool with_barrier) const {
   const MortarGapTerm* t = terms_[static_cast<std::size_t>(i)].get();
   if (!t) return std::numeric_limits<double>::infinity();
-  Vec local;
-  gather(*t, q, local);
-  return t->engaged_value(local, with_barrier);
+  return t->engaged_value_global(q, with_barrier);
 }
 
 double MortarContact::gap(int i, const Vec& q) const {
@@ -578,16 +576,21 @@ void MortarContact::prepare(const Vec& q, const Vec& v, double dt) {
   }
   if (!direct) box_tests_ = grid_.tests();
 
+  // A node's term is kept from the step before where its nodes and pairs
+  // are the same (most steps in contact): a term is its nodes, pairs and
+  // the contact's constants, nothing of q.
   n_pairs_ = 0;
+  std::vector<int> nodes;
+  std::vector<MortarPair> pairs;
   for (std::size_t i = 0; i < slave_nodes_.size(); ++i) {
-    std::vector<int> nodes;
+    nodes.clear();
+    pairs.clear();
     auto local = [&](int node) {
       auto it = std::find(nodes.begin(), nodes.end(), node);
       if (it != nodes.end()) return static_cast<int>(it - nodes.begin());
       nodes.push_back(node);
       return static_cast<int>(nodes.size()) - 1;
     };
-    std::vector<MortarPair> pairs;
     for (int k = 0; k < 2; ++k) {
       const int e = node_edges_[i][static_cast<std::size_t>(k)];
       if (e < 0) continue;
@@ -598,11 +601,12 @@ void MortarContact::prepare(const Vec& q, const Vec& v, double dt) {
       }
     }
     n_pairs_ += static_cast<long>(pairs.size());
-    terms_[i] = pairs.empty()
-                    ? nullptr
-                    : std::make_unique<MortarGapTerm>(
-                          nodes, std::move(pairs), weights_[i], describe(static_cast<int>(i)),
-                          kBarrierHeight * weights_[i], options_.distance_fade);
+    if (pairs.empty())
+      terms_[i] = nullptr;
+    else if (!terms_[i] || !terms_[i]->joins(nodes, pairs))
+      terms_[i] =
+          std::make_unique<MortarGapTerm>(nodes, pairs, weights_[i], describe(static_cast<int>(i)),
+                                          kBarrierHeight * weights_[i], options_.distance_fade);
   }
 }
 
