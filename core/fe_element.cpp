@@ -100,6 +100,9 @@ Q1Element::Q1Element(std::vector<int> dofs, const QuadNodes& x, const Material& 
     gp_[static_cast<std::size_t>(g)].dn = shape_parent_gradient(p.xi, p.eta) * j.inverse();
     gp_[static_cast<std::size_t>(g)].weight = p.weight * j.determinant();
     dn_all_.middleCols<2>(2 * g) = gp_[static_cast<std::size_t>(g)].dn;
+    for (int a = 0; a < 4; ++a)
+      for (int k = 0; k < 2; ++k) dn_by_point_[a][k][g] = gp_[static_cast<std::size_t>(g)].dn(a, k);
+    weight_by_point_[g] = gp_[static_cast<std::size_t>(g)].weight;
   }
 }
 
@@ -394,6 +397,47 @@ void Q1Element::discrete_kernel(const Vec8& q0, const Vec8& q1, Vec8& grad, Mat8
   if (!small_strain) add_node_hessian(gab, *jac);
 }
 
+void Q1Element::quadratic_discrete_forces(const Vec8& q0, const Vec8& q1, Vec8& grad) const {
+  using P4 = Eigen::Array<double, kGaussPoints, 1>;  // one value per Gauss point
+  const auto dn = [&](int a, int j) { return Eigen::Map<const P4>(dn_by_point_[a][j]); };
+  // F0, F1 of every point from the edge vectors (as point_f_all).
+  const auto point_fs = [&](const Vec8& q, P4(&f)[2][2]) {
+    for (int i = 0; i < 2; ++i) {
+      const double e1 = q[2 + i] - q[i], e2 = q[4 + i] - q[i], e3 = q[6 + i] - q[i];
+      for (int j = 0; j < 2; ++j) f[i][j] = e1 * dn(1, j) + e2 * dn(2, j) + e3 * dn(3, j);
+    }
+  };
+  P4 f0[2][2], f1[2][2];
+  point_fs(q0, f0);
+  point_fs(q1, f1);
+  // pi = (C11, C22, C12) at both ends, pi_mid, s = w dW(pi_mid) (SVK's
+  // energy_gradient, point by point) and P = F_mid [2 s0, s2; s2, 2 s1].
+  const P4 c11 = 0.5 * ((f0[0][0] * f0[0][0] + f0[1][0] * f0[1][0]) +
+                        (f1[0][0] * f1[0][0] + f1[1][0] * f1[1][0]));
+  const P4 c22 = 0.5 * ((f0[0][1] * f0[0][1] + f0[1][1] * f0[1][1]) +
+                        (f1[0][1] * f1[0][1] + f1[1][1] * f1[1][1]));
+  const P4 c12 = 0.5 * ((f0[0][0] * f0[0][1] + f0[1][0] * f0[1][1]) +
+                        (f1[0][0] * f1[0][1] + f1[1][0] * f1[1][1]));
+  const Eigen::Map<const P4> w(weight_by_point_);
+  const double lambda = material_.lambda, mu = material_.mu;
+  const P4 shared = lambda / 4.0 * (c11 + c22 - 2.0);
+  const P4 a = 2.0 * (w * (shared + mu / 2.0 * (c11 - 1.0)));
+  const P4 b = 2.0 * (w * (shared + mu / 2.0 * (c22 - 1.0)));
+  const P4 c = w * (mu * c12);
+  P4 p[2][2];
+  for (int i = 0; i < 2; ++i) {
+    const P4 fm0 = 0.5 * (f0[i][0] + f1[i][0]), fm1 = 0.5 * (f0[i][1] + f1[i][1]);
+    p[i][0] = fm0 * a + fm1 * c;
+    p[i][1] = fm0 * c + fm1 * b;
+  }
+  // Forces [P_1 .. P_4] dn_all_^T, summed in dn_all_'s column order.
+  for (int k = 0; k < 4; ++k)
+    for (int i = 0; i < 2; ++i) {
+      const P4 t0 = p[i][0] * dn(k, 0), t1 = p[i][1] * dn(k, 1);
+      grad[2 * k + i] = ((((((t0[0] + t1[0]) + t0[1]) + t1[1]) + t0[2]) + t1[2]) + t0[3]) + t1[3];
+    }
+}
+
 void Q1Element::kernel(GradientKind kind, const Vec8& q0, const Vec8& q1, Vec8& grad,
                        Mat8* jac) const {
   switch (kind) {
@@ -404,7 +448,10 @@ void Q1Element::kernel(GradientKind kind, const Vec8& q0, const Vec8& q1, Vec8& 
       exact_kernel(0.5 * (q0 + q1), 0.5, grad, jac);
       break;
     case GradientKind::Discrete:
-      discrete_kernel(q0, q1, grad, jac);
+      if (!jac && material_.model == MaterialModel::SaintVenantKirchhoff)
+        quadratic_discrete_forces(q0, q1, grad);
+      else
+        discrete_kernel(q0, q1, grad, jac);
       break;
   }
 }
