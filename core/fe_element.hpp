@@ -107,8 +107,8 @@ class Q1Element final : public Term {
   using Mat24 = Eigen::Matrix<double, 2, 4>;    // column A: node A's x and y
   using Mat812 = Eigen::Matrix<double, 8, 12>;  // the 4 Gauss points' 8 x 3 blocks
   using Mat28 = Eigen::Matrix<double, 2, 8>;    // the 4 Gauss points' 2 x 2 blocks
-  // F, pi and Dpi of Gauss point g (fixed sizes). Always inlined: they are
-  // the kernels' inner loop, and a call each costs as much as their work.
+  // F of all points, pi and Dpi of one (fixed sizes). Always inlined: they
+  // are the kernels' inner loop, and a call each costs as much as their work.
   [[gnu::always_inline]] inline Mat28 point_f_all(const Vec8& q) const;  // [F_1 .. F_4]
   [[gnu::always_inline]] inline Eigen::Vector3d point_invariants(const Eigen::Matrix2d& f) const;
   // Dpi transposed (8 x 3): its columns are contiguous, so the products
@@ -128,9 +128,9 @@ class Q1Element final : public Term {
   [[gnu::always_inline]] inline void add_node_hessian(const Eigen::Matrix4d& gab, Mat8& k) const;
   void exact_kernel(const Vec8& q, double jac_scale, Vec8& grad, Mat8* jac) const;
   void discrete_kernel(const Vec8& q0, const Vec8& q1, Vec8& grad, Mat8* jac) const;
-  // discrete_kernel's forces alone for a material quadratic in C (no
-  // correction): the same operations in the same order, laid out point by
-  // point in arrays of 4 (the Gauss points), which the compiler vectorizes.
+  // discrete_kernel's forces alone for St. Venant-Kirchhoff (quadratic in
+  // C: no correction; its energy_gradient written out): the same operations
+  // in the same order, the 4 Gauss points side by side in Eigen arrays.
   void quadratic_discrete_forces(const Vec8& q0, const Vec8& q1, Vec8& grad) const;
   // The kernel of `kind` on local positions (fixed_gradient, add_fixed).
   void kernel(GradientKind kind, const Vec8& q0, const Vec8& q1, Vec8& grad, Mat8* jac) const;
