@@ -125,6 +125,65 @@ TEST(ContactPatch, FiniteStrainMaterialsMissTheLinearValue) {
   }
 }
 
+// The contact's gaps read the global positions by the terms' dofs
+// (MortarGapTerm::engaged_value_global): the same numbers, bit for bit, as
+// the term's engaged_value of the gathered positions. A search keeps the
+// terms whose nodes and pairs stay (the same objects) and builds the
+// others: its gaps are those of a contact that searched there alone.
+TEST(ContactPatch, GapsOfKeptTermsAreThoseOfAFreshSearch) {
+  Blocks kept = stacked_blocks(5, 7, 0.02, MaterialModel::SaintVenantKirchhoff);
+  const System& s = *kept.system;
+  const State st = initial_state(s);
+  const double dt = 0.01;
+  const int n = s.n_unilateral();
+  const auto shifted = [&](double dx) {
+    Vec q = st.q;
+    for (int a = 0; a < kept.upper.n_nodes; ++a) q[s.dof(kept.upper.node_offset + a, 0)] += dx;
+    return q;
+  };
+  const auto terms = [&](const System& sys) {
+    std::vector<const Term*> t(static_cast<std::size_t>(n));
+    for (int id = 0; id < n; ++id) t[static_cast<std::size_t>(id)] = sys.unilateral_term(id);
+    return t;
+  };
+  s.unilateral()[0]->prepare(st.q, st.v, dt);
+  std::vector<const Term*> before = terms(s);
+  for (const double dx : {0.01, 0.37}) {
+    const Vec q = shifted(dx);
+    s.unilateral()[0]->prepare(q, st.v, dt);
+    Blocks fresh = stacked_blocks(5, 7, 0.02, MaterialModel::SaintVenantKirchhoff);
+    fresh.system->unilateral()[0]->prepare(q, st.v, dt);
+    const std::vector<const Term*> now = terms(s);
+    int same = 0, anew = 0, with_pairs = 0;
+    const Vec at = q + 1e-3 * Vec::LinSpaced(q.size(), -1.0, 1.0).array().sin().matrix();
+    for (int id = 0; id < n; ++id) {
+      const auto k = static_cast<std::size_t>(id);
+      ASSERT_EQ(now[k] == nullptr, fresh.system->unilateral_term(id) == nullptr) << id;
+      if (!now[k]) continue;
+      ++with_pairs;
+      (now[k] == before[k] ? same : anew) += 1;
+      const double g = s.unilateral()[0]->gap(id, at);
+      const double o = s.unilateral()[0]->overlap_gap(id, at);
+      EXPECT_EQ(g, fresh.system->unilateral()[0]->gap(id, at)) << "dx " << dx << " node " << id;
+      EXPECT_EQ(o, fresh.system->unilateral()[0]->overlap_gap(id, at)) << dx << " " << id;
+      const auto* term = dynamic_cast<const MortarGapTerm*>(now[k]);
+      ASSERT_NE(term, nullptr);
+      Vec local;
+      gather(*term, at, local);
+      EXPECT_EQ(g, term->engaged_value(local, true)) << dx << " " << id;
+      EXPECT_EQ(o, term->engaged_value(local, false)) << dx << " " << id;
+    }
+    std::printf("  shift %.2f: %d nodes with pairs, %d terms kept, %d new\n", dx, with_pairs, same,
+                anew);
+    ASSERT_GE(with_pairs, 5);
+    if (dx < 0.1)
+      EXPECT_EQ(anew, 0);  // a hundredth of an edge: every node keeps its pairs
+    else
+      EXPECT_GE(anew, 1);  // a third of an edge: some pairs change
+    before = now;
+  }
+}
+
 // A contact entering a re-solve borders the last factorization with its
 // multiplier's column and row (NewtonProblem::added_unknown, the chord steps
 // of NewtonSolver::solve): they are the Jacobian's own, at a point away from
