@@ -411,7 +411,8 @@ void Q1Element::quadratic_discrete_forces(const Vec8& q0, const Vec8& q1, Vec8& 
   point_fs(q0, f0);
   point_fs(q1, f1);
   // pi = (C11, C22, C12) at both ends, pi_mid, s = w dW(pi_mid) (SVK's
-  // energy_gradient, point by point) and P = F_mid [2 s0, s2; s2, 2 s1].
+  // gradient, Material::svk_gradient, point by point) and P = F_mid [2 s0,
+  // s2; s2, 2 s1].
   const P4 c11 = 0.5 * ((f0[0][0] * f0[0][0] + f0[1][0] * f0[1][0]) +
                         (f1[0][0] * f1[0][0] + f1[1][0] * f1[1][0]));
   const P4 c22 = 0.5 * ((f0[0][1] * f0[0][1] + f0[1][1] * f0[1][1]) +
@@ -419,11 +420,8 @@ void Q1Element::quadratic_discrete_forces(const Vec8& q0, const Vec8& q1, Vec8& 
   const P4 c12 = 0.5 * ((f0[0][0] * f0[0][1] + f0[1][0] * f0[1][1]) +
                         (f1[0][0] * f1[0][1] + f1[1][0] * f1[1][1]));
   const Eigen::Map<const P4> w(weight_by_point_);
-  const double lambda = material_.lambda, mu = material_.mu;
-  const P4 shared = lambda / 4.0 * (c11 + c22 - 2.0);
-  const P4 a = 2.0 * (w * (shared + mu / 2.0 * (c11 - 1.0)));
-  const P4 b = 2.0 * (w * (shared + mu / 2.0 * (c22 - 1.0)));
-  const P4 c = w * (mu * c12);
+  const std::array<P4, 3> s = material_.svk_gradient(c11, c22, c12);
+  const P4 a = 2.0 * (w * s[0]), b = 2.0 * (w * s[1]), c = w * s[2];
   P4 p[2][2];
   for (int i = 0; i < 2; ++i) {
     const P4 fm0 = 0.5 * (f0[i][0] + f1[i][0]), fm1 = 0.5 * (f0[i][1] + f1[i][1]);

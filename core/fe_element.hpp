@@ -129,7 +129,7 @@ class Q1Element final : public Term {
   void exact_kernel(const Vec8& q, double jac_scale, Vec8& grad, Mat8* jac) const;
   void discrete_kernel(const Vec8& q0, const Vec8& q1, Vec8& grad, Mat8* jac) const;
   // discrete_kernel's forces alone for St. Venant-Kirchhoff (quadratic in
-  // C: no correction; its energy_gradient written out): the same operations
+  // C: no correction; Material::svk_gradient of arrays): the same operations
   // in the same order, the 4 Gauss points side by side in Eigen arrays.
   void quadratic_discrete_forces(const Vec8& q0, const Vec8& q1, Vec8& grad) const;
   // The kernel of `kind` on local positions (fixed_gradient, add_fixed).

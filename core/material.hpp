@@ -40,6 +40,7 @@
 #pragma once
 
 #include <Eigen/Dense>
+#include <array>
 #include <string>
 
 namespace emdae {
@@ -68,6 +69,11 @@ struct Material {
   double energy(const Eigen::Vector3d& pi) const;
   /// dW/dpi (note the factor 2 on the C12 component, see above).
   Eigen::Vector3d energy_gradient(const Eigen::Vector3d& pi) const;
+  /// St. Venant-Kirchhoff's dW/dpi from pi's three components: of doubles
+  /// (energy_gradient), or of arrays holding one value per Gauss point (the
+  /// Q1 kernel's forces point by point, core/fe_element.cpp).
+  template <class T>
+  std::array<T, 3> svk_gradient(const T& c11, const T& c22, const T& c12) const;
   /// d^2 W / dpi^2.
   Eigen::Matrix3d energy_hessian(const Eigen::Vector3d& pi) const;
   /// v^T (d^2 W / dpi^2) v, without forming the Hessian (the discrete
@@ -106,10 +112,16 @@ inline Eigen::Vector3d Material::energy_gradient(const Eigen::Vector3d& pi) cons
     return {a + 2.0 * mu * pi[0], a + 2.0 * mu * pi[1], mu * pi[2]};  // sigma11, sigma22, sigma12
   }
   if (model == MaterialModel::SaintVenantKirchhoff) {
-    const double a = lambda / 4.0 * (pi[0] + pi[1] - 2.0);
-    return {a + mu / 2.0 * (pi[0] - 1.0), a + mu / 2.0 * (pi[1] - 1.0), mu * pi[2]};
+    const std::array<double, 3> g = svk_gradient(pi[0], pi[1], pi[2]);
+    return {g[0], g[1], g[2]};
   }
   return neo_hooke_gradient(pi);
+}
+
+template <class T>
+std::array<T, 3> Material::svk_gradient(const T& c11, const T& c22, const T& c12) const {
+  const T a = lambda / 4.0 * (c11 + c22 - 2.0);
+  return {T(a + mu / 2.0 * (c11 - 1.0)), T(a + mu / 2.0 * (c22 - 1.0)), T(mu * c12)};
 }
 
 inline Eigen::Matrix3d Material::energy_hessian(const Eigen::Vector3d& pi) const {
